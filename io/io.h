@@ -1,0 +1,59 @@
+#pragma once
+/// \file io.h
+/// Reading and writing meshes and volumes by file extension, over whatever adapters this build
+/// has (formats always; Draco for .drc/.gltf/.glb reading; OpenVDB for .vdb).
+///
+/// Every writer writes to a temporary file beside the target and renames it into place only
+/// when complete, so a failed run never leaves a partial file and never damages an existing one.
+/// Every error is thrown (IoError for the file system, InvalidInput for bad contents) with a
+/// message that names the file and the problem.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/volume.h"
+
+namespace normalflow {
+
+enum class MeshFormat { Unknown, Obj, Ply, Off, Stl, Gltf, Glb, Drc };
+
+/// The format implied by path's extension (case-insensitive); Unknown if none matches.
+MeshFormat mesh_format_from_path(const std::string& path);
+
+/// What a reader found in the file, before any repair.
+struct ReadInfo {
+    std::string format;               ///< "obj", "ply-ascii", "ply-binary-le", "stl-binary", ...
+    std::size_t file_vertices = 0;    ///< points in the file
+    std::size_t file_faces = 0;       ///< polygons in the file (before triangulation)
+    std::size_t polygons_split = 0;   ///< faces with more than 3 corners, split into triangles (fan)
+    std::vector<std::string> warnings;  ///< oddities handled (e.g. "12 faces had more than 3 corners")
+};
+
+/// Options for writing meshes.
+struct WriteOptions {
+    bool binary = true;   ///< PLY/STL: binary (default) or ASCII
+};
+
+/// Reads a mesh as a polygon soup: every face is kept (polygons are split into a triangle fan),
+/// points are not merged, orientation is not changed.
+/// \throw IoError if the file cannot be opened or read; InvalidInput for unknown extensions and bad
+///        contents (truncation, garbage, NaN/Inf coordinates, indices out of range, faces with < 3
+///        corners, no faces).
+Mesh read_mesh(const std::string& path, ReadInfo* info = nullptr);
+
+/// Writes m in the format implied by path's extension, atomically (temporary file + rename).
+/// \throw InvalidInput for unknown extensions or invalid meshes; IoError if the file cannot be written.
+void write_mesh(const std::string& path, const Mesh& m, const WriteOptions& opt = {});
+
+/// True for .vdb and .nrrd paths.
+bool is_volume_path(const std::string& path);
+
+/// Reads a signed distance volume from .nrrd or .vdb (the first float grid).
+Volume read_volume(const std::string& path);
+
+/// Writes v as .nrrd (dense, band values and ±background elsewhere) or .vdb (sparse level set).
+void write_volume(const std::string& path, const Volume& v);
+
+}  // namespace normalflow

@@ -1,0 +1,50 @@
+#pragma once
+/// \file mesh.h
+/// The one mesh type of normalflow: an indexed triangle list (a polygon soup, possibly with
+/// duplicate points, several components, holes, non-manifold edges and mixed orientation).
+/// Half-edge structures (CGAL Surface_mesh, OpenMesh) live only inside io/ adapters.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace normalflow {
+
+/// Three vertex indices, counter-clockwise seen from outside for a well-oriented closed mesh.
+using Tri = std::array<std::uint32_t, 3>;
+
+/// Indexed triangles in world units. positions: #V points; triangles: #F index triples into positions.
+struct Mesh {
+    std::vector<Vec3f> positions;
+    std::vector<Tri> triangles;
+
+    bool empty() const { return triangles.empty(); }
+};
+
+/// Axis-aligned bounding box of the referenced and unreferenced points alike; min > max when empty.
+struct Box3d {
+    Vec3d min{1e300, 1e300, 1e300};
+    Vec3d max{-1e300, -1e300, -1e300};
+    bool empty() const { return min.x > max.x; }
+    Vec3d size() const { return empty() ? Vec3d{} : max - min; }
+    Vec3d center() const { return (min + max) * 0.5; }
+    double diagonal() const { return empty() ? 0.0 : norm(max - min); }
+    void extend(const Vec3d& p) { min = cwise_min(min, p); max = cwise_max(max, p); }
+};
+
+/// Bounding box of all positions of m.
+inline Box3d bounding_box(const Mesh& m) {
+    Box3d b;
+    for (const auto& p : m.positions) b.extend(Vec3d(p));
+    return b;
+}
+
+/// Face normal (unnormalised: length = 2 × area) of triangle t.
+inline Vec3d face_area_vector(const Mesh& m, const Tri& t) {
+    const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
+    return cross(b - a, c - a);
+}
+
+}  // namespace normalflow

@@ -1,0 +1,124 @@
+#pragma once
+/// \file volume.h
+/// The one volume type of normalflow: a sparse, block-structured signed distance volume that
+/// stores only the narrow band around the surface, so memory grows with the surface area,
+/// not the bounding volume.
+///
+/// Layout: the grid is cut into 8×8×8 blocks. A dense table (one int32 per block, 2 bytes per
+/// 256 voxels) says for each block either where its 512 values are stored, or that the block
+/// lies entirely outside (+background) or inside (−background) the surface. Values inside a
+/// block are stored x fastest, then y, then z. Sign convention: negative inside, positive
+/// outside (as OpenVDB); values in world units.
+
+#include <array>
+#include <cassert>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/vec.h"
+
+namespace normalflow {
+
+/// A regular grid of samples: sample (i, j, k) sits at origin + voxel_size * (i, j, k).
+struct Grid {
+    Vec3d origin;                   ///< world position of sample (0, 0, 0)
+    double voxel_size = 1.0;        ///< h, world units, > 0
+    std::array<int, 3> dims{0, 0, 0};  ///< number of samples along x, y, z
+
+    /// World position of (possibly fractional) index (i, j, k).
+    Vec3d world(const Vec3d& ijk) const { return origin + ijk * voxel_size; }
+    /// Continuous index of a world position.
+    Vec3d index(const Vec3d& w) const { return (w - origin) / voxel_size; }
+    bool contains(int i, int j, int k) const {
+        return i >= 0 && j >= 0 && k >= 0 && i < dims[0] && j < dims[1] && k < dims[2];
+    }
+    std::size_t sample_count() const {
+        return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]);
+    }
+};
+
+inline constexpr int kBlockLog2 = 3;
+inline constexpr int kBlockDim = 1 << kBlockLog2;                        // 8
+inline constexpr int kBlockVoxels = kBlockDim * kBlockDim * kBlockDim;   // 512
+inline constexpr std::int32_t kBlockOutside = -1;  ///< unallocated block, value +background
+inline constexpr std::int32_t kBlockInside = -2;   ///< unallocated block, value -background
+
+/// Sparse narrow-band signed distance volume (see file comment).
+/// Invariant: every sample with |phi| < half_width * voxel_size lies in an allocated block.
+struct Volume {
+    Grid grid;
+    float background = 3.0f;   ///< world units, > 0: |phi| of every sample outside allocated blocks
+    float half_width = 3.0f;   ///< band half-width in voxels
+    std::array<int, 3> block_dims{0, 0, 0};     ///< ceil(grid.dims / 8)
+    std::vector<std::int32_t> block_table;      ///< per block: index into block_coords, or kBlockOutside/kBlockInside
+    std::vector<std::array<int, 3>> block_coords;  ///< block coordinates (in blocks) of each allocated block
+    std::vector<float> values;                  ///< block_coords.size() * 512 samples
+
+    Volume() = default;
+    /// An empty volume (every block outside) over grid g; half_width in voxels.
+    Volume(const Grid& g, float half_width_voxels) { reset(g, half_width_voxels); }
+
+    void reset(const Grid& g, float half_width_voxels) {
+        grid = g;
+        half_width = half_width_voxels;
+        background = float(half_width_voxels * g.voxel_size);
+        for (int a = 0; a < 3; ++a) block_dims[a] = (g.dims[a] + kBlockDim - 1) / kBlockDim;
+        block_table.assign(std::size_t(block_dims[0]) * block_dims[1] * block_dims[2], kBlockOutside);
+        block_coords.clear();
+        values.clear();
+    }
+
+    std::size_t block_count() const { return block_coords.size(); }
+    std::size_t table_index(int bi, int bj, int bk) const {
+        return (std::size_t(bk) * block_dims[1] + std::size_t(bj)) * block_dims[0] + std::size_t(bi);
+    }
+    static constexpr int local_index(int li, int lj, int lk) {
+        return (lk * kBlockDim + lj) * kBlockDim + li;
+    }
+    /// Block slot of sample (i, j, k) (which must be inside the grid): >= 0 or kBlockOutside/Inside.
+    std::int32_t block_of(int i, int j, int k) const {
+        return block_table[table_index(i >> kBlockLog2, j >> kBlockLog2, k >> kBlockLog2)];
+    }
+
+    /// Value at sample (i, j, k); +background outside the grid.
+    float value(int i, int j, int k) const {
+        if (!grid.contains(i, j, k)) return background;
+        const std::int32_t b = block_of(i, j, k);
+        if (b >= 0)
+            return values[std::size_t(b) * kBlockVoxels +
+                          local_index(i & (kBlockDim - 1), j & (kBlockDim - 1), k & (kBlockDim - 1))];
+        return b == kBlockInside ? -background : background;
+    }
+
+    /// Allocates block (bi, bj, bk) if needed (filled with its tile value); returns its slot.
+    std::int32_t allocate_block(int bi, int bj, int bk) {
+        std::int32_t& slot = block_table[table_index(bi, bj, bk)];
+        if (slot >= 0) return slot;
+        const float fill = slot == kBlockInside ? -background : background;
+        slot = std::int32_t(block_coords.size());
+        block_coords.push_back({bi, bj, bk});
+        values.resize(values.size() + kBlockVoxels, fill);
+        return slot;
+    }
+
+    /// Sets sample (i, j, k) (inside the grid), allocating its block if needed.
+    void set(int i, int j, int k, float v) {
+        assert(grid.contains(i, j, k) && "Volume::set: index outside the grid");
+        const std::int32_t b = allocate_block(i >> kBlockLog2, j >> kBlockLog2, k >> kBlockLog2);
+        values[std::size_t(b) * kBlockVoxels +
+               local_index(i & (kBlockDim - 1), j & (kBlockDim - 1), k & (kBlockDim - 1))] = v;
+    }
+
+    /// Pointer to the 512 values of allocated block slot b.
+    float* block_values(std::int32_t b) { return values.data() + std::size_t(b) * kBlockVoxels; }
+    const float* block_values(std::int32_t b) const { return values.data() + std::size_t(b) * kBlockVoxels; }
+
+    /// Bytes held by this volume (table + blocks).
+    std::size_t memory_bytes() const {
+        return block_table.size() * sizeof(std::int32_t) + block_coords.size() * sizeof(block_coords[0]) +
+               values.size() * sizeof(float);
+    }
+};
+
+}  // namespace normalflow
