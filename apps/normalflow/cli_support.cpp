@@ -1,0 +1,97 @@
+#include "cli_support.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <new>
+
+#include "core/errors.h"
+
+namespace normalflow::cli {
+
+namespace {
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_signal(int) { g_interrupted.store(true); }
+}  // namespace
+
+void install_interrupt_handler() {
+    struct sigaction sa {};
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    sigaction(SIGTERM, &sa, nullptr);
+}
+
+bool interrupted() { return g_interrupted.load(); }
+
+std::size_t peak_memory_bytes() {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    return std::size_t(ru.ru_maxrss) * 1024;  // Linux: kilobytes
+}
+
+TerminalProgress::TerminalProgress(const OutputFlags& f)
+    : show_(!f.quiet && !f.json && ::isatty(STDERR_FILENO)), quiet_(f.quiet || f.json) {}
+
+TerminalProgress::~TerminalProgress() { clear_line(); }
+
+void TerminalProgress::clear_line() {
+    if (show_ && last_percent_ >= 0) std::fprintf(stderr, "\r\033[K");
+    last_percent_ = -1;
+}
+
+void TerminalProgress::begin(std::string_view stage) {
+    clear_line();
+    stage_ = std::string(stage);
+    progress(0.0);
+}
+
+void TerminalProgress::progress(double fraction) {
+    if (!show_) return;
+    const int pct = int(fraction * 100.0 + 0.5);
+    const auto now = std::chrono::steady_clock::now();
+    if (pct == last_percent_ || (now - last_draw_ < std::chrono::milliseconds(100) && pct != 100)) return;
+    last_percent_ = pct;
+    last_draw_ = now;
+    std::fprintf(stderr, "\r\033[K%-12s %3d%%", stage_.c_str(), pct);
+    std::fflush(stderr);
+}
+
+bool TerminalProgress::should_stop() { return interrupted(); }
+
+void TerminalProgress::note(const std::string& line) const {
+    if (quiet_) return;
+    std::fprintf(stderr, "%s%s\n", show_ ? "\r\033[K" : "", line.c_str());
+}
+
+int guarded(const char* command, int (*fn)(void*), void* ctx) {
+    try {
+        return fn(ctx);
+    } catch (const Cancelled& e) {
+        std::fprintf(stderr, "normalflow %s: cancelled\n", command);
+        return 130;
+    } catch (const InvalidInput& e) {
+        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
+        return 3;
+    } catch (const IoError& e) {
+        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
+        return 4;
+    } catch (const NumericalError& e) {
+        std::fprintf(stderr, "normalflow %s: numerical error: %s\n", command, e.what());
+        return 5;
+    } catch (const OutOfMemory& e) {
+        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
+        return 6;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "normalflow %s: out of memory\n", command);
+        return 6;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
+        return 1;
+    }
+}
+
+}  // namespace normalflow::cli

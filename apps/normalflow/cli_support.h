@@ -1,0 +1,66 @@
+#pragma once
+// Shared plumbing of the normalflow subcommands: terminal progress, Ctrl-C, JSON output, exit codes.
+#include <chrono>
+#include <string>
+
+#include "core/progress.h"
+#include "io/formats/json.h"
+
+namespace normalflow::cli {
+
+/// Output switches every subcommand takes.
+struct OutputFlags {
+    bool json = false;   ///< one JSON object on the last line of stdout
+    bool quiet = false;  ///< nothing but errors
+};
+
+/// Progress on stderr (only when stderr is a terminal and not quiet/json); stops on SIGINT.
+class TerminalProgress : public Progress {
+public:
+    explicit TerminalProgress(const OutputFlags& f);
+    ~TerminalProgress() override;
+    void begin(std::string_view stage) override;
+    void progress(double fraction) override;
+    bool should_stop() override;
+    /// A line of information for the user (stderr; suppressed by --quiet and --json).
+    void note(const std::string& line) const;
+
+private:
+    bool show_;
+    bool quiet_;
+    std::string stage_;
+    int last_percent_ = -1;
+    std::chrono::steady_clock::time_point last_draw_{};
+    void clear_line();
+};
+
+/// Installs the SIGINT/SIGTERM handler that makes should_stop() true.
+void install_interrupt_handler();
+bool interrupted();
+
+/// Peak resident memory of this process, bytes.
+std::size_t peak_memory_bytes();
+
+/// Wall-clock stopwatch in seconds.
+class Stopwatch {
+public:
+    Stopwatch() : t0_(std::chrono::steady_clock::now()) {}
+    double seconds() const {
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+    }
+    double lap() {
+        const auto t = std::chrono::steady_clock::now();
+        const double s = std::chrono::duration<double>(t - t0_).count();
+        t0_ = t;
+        return s;
+    }
+
+private:
+    std::chrono::steady_clock::time_point t0_;
+};
+
+/// Runs fn, mapping normalflow's exceptions to one line on stderr and an exit status:
+/// 0 ok, 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled.
+int guarded(const char* command, int (*fn)(void*), void* ctx);
+
+}  // namespace normalflow::cli

@@ -1,0 +1,68 @@
+// normalflow info IN [--self-intersections] [--json]: what a mesh file holds, and its defects.
+#include <cstdio>
+
+#include "commands.h"
+#include "core/mesh_report.h"
+#include "io/io.h"
+#ifdef NORMALFLOW_HAS_CGAL
+#include "io/cgal/repair.h"
+#endif
+
+namespace normalflow::cli {
+
+int run_info(const InfoArgs& a) {
+    Stopwatch clock;
+    ReadInfo info;
+    const Mesh mesh = read_mesh(a.input, &info);
+    const MeshReport r = mesh_report(mesh);
+    long long self_intersections = -1;
+#ifdef NORMALFLOW_HAS_CGAL
+    if (a.self_intersections) self_intersections = static_cast<long long>(count_self_intersections(mesh));
+#else
+    if (a.self_intersections) throw InvalidInput("info: --self-intersections needs a build with CGAL");
+#endif
+    if (a.out.json) {
+        Json j = Json::object();
+        j.set("command", "info").set("input", a.input).set("format", info.format);
+        j.set("file_vertices", info.file_vertices).set("file_faces", info.file_faces);
+        j.set("polygons_split", info.polygons_split);
+        j.set("vertices", r.vertices).set("triangles", r.faces).set("components", r.components);
+        j.set("boundary_edges", r.boundary_edges).set("non_manifold_edges", r.non_manifold_edges);
+        j.set("non_manifold_vertices", r.non_manifold_vertices).set("degenerate_faces", r.degenerate_faces);
+        j.set("duplicate_faces", r.duplicate_faces).set("inconsistent_edges", r.inconsistent_edges);
+        j.set("closed", r.closed).set("manifold", r.manifold).set("oriented", r.oriented);
+        j.set("euler_characteristic", r.euler_characteristic).set("area", r.area).set("volume", r.volume);
+        Json box = Json::array();
+        for (double c : {r.bbox.min.x, r.bbox.min.y, r.bbox.min.z, r.bbox.max.x, r.bbox.max.y, r.bbox.max.z}) box.push(c);
+        j.set("bbox", box);
+        if (self_intersections >= 0) j.set("self_intersecting_pairs", self_intersections);
+        Json w = Json::array(info.warnings);
+        for (const auto& s : r.warnings) w.push(s);
+        j.set("warnings", w).set("seconds", clock.seconds());
+        std::printf("%s\n", j.dump().c_str());
+        return 0;
+    }
+    if (a.out.quiet) return 0;
+    std::printf("%s (%s)\n", a.input.c_str(), info.format.c_str());
+    std::printf("  in file          %zu points, %zu faces%s\n", info.file_vertices, info.file_faces,
+                info.polygons_split ? " (polygons split into triangles)" : "");
+    std::printf("  vertices         %zu unique positions\n", r.vertices);
+    std::printf("  triangles        %zu\n", r.faces);
+    std::printf("  components       %zu\n", r.components);
+    std::printf("  boundary edges   %zu\n", r.boundary_edges);
+    std::printf("  non-manifold     %zu edges, %zu vertices\n", r.non_manifold_edges, r.non_manifold_vertices);
+    std::printf("  degenerate       %zu faces\n", r.degenerate_faces);
+    std::printf("  duplicate        %zu faces\n", r.duplicate_faces);
+    std::printf("  inconsistent     %zu edges (orientation)\n", r.inconsistent_edges);
+    if (self_intersections >= 0) std::printf("  self-intersecting %lld triangle pairs\n", self_intersections);
+    std::printf("  closed           %s\n  manifold         %s\n", r.closed ? "yes" : "no", r.manifold ? "yes" : "no");
+    std::printf("  euler char.      %ld\n", r.euler_characteristic);
+    std::printf("  area, volume     %.6g, %.6g\n", r.area, r.volume);
+    std::printf("  bounding box     [%.6g %.6g %.6g] - [%.6g %.6g %.6g]\n", r.bbox.min.x, r.bbox.min.y, r.bbox.min.z,
+                r.bbox.max.x, r.bbox.max.y, r.bbox.max.z);
+    for (const auto& s : info.warnings) std::printf("  warning: %s\n", s.c_str());
+    for (const auto& s : r.warnings) std::printf("  warning: %s\n", s.c_str());
+    return 0;
+}
+
+}  // namespace normalflow::cli
