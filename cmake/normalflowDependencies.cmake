@@ -24,3 +24,19 @@ if(NORMALFLOW_WITH_DRACO AND NOT TARGET draco::draco)
   find_package(draco CONFIG REQUIRED)
   find_package(Eigen3 3.3 CONFIG REQUIRED)   # draco's glTF headers include <Eigen/Geometry>
 endif()
+
+if(NORMALFLOW_WITH_OPENMESH AND NOT TARGET OpenMeshCore)
+  find_package(OpenMesh CONFIG REQUIRED)     # no version file in Debian 12: no version argument
+endif()
+
+if(NORMALFLOW_WITH_TETGEN AND NOT TARGET normalflow_tetgen_lib)
+  # Debian's libtet1.5-dev has no CMake config or pkg-config file: wrap it in an imported target
+  # that carries TETLIBRARY (tetgen.h must see it; the library was built with it).
+  find_path(TETGEN_INCLUDE_DIR tetgen.h REQUIRED)
+  find_library(TETGEN_LIBRARY tet REQUIRED)
+  add_library(normalflow_tetgen_lib UNKNOWN IMPORTED)
+  set_target_properties(normalflow_tetgen_lib PROPERTIES
+    IMPORTED_LOCATION "${TETGEN_LIBRARY}"
+    INTERFACE_INCLUDE_DIRECTORIES "${TETGEN_INCLUDE_DIR}"
+    INTERFACE_COMPILE_DEFINITIONS TETLIBRARY)
+endif()

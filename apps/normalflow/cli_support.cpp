@@ -94,4 +94,9 @@ int guarded(const char* command, int (*fn)(void*), void* ctx) {
     }
 }
 
+void add_output_flags(CLI::App* cmd, OutputFlags& out) {
+    cmd->add_flag("--json", out.json, "print one JSON object on the last line of standard output");
+    cmd->add_flag("-q,--quiet", out.quiet, "print nothing but errors");
+}
+
 }  // namespace normalflow::cli

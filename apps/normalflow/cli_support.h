@@ -1,6 +1,9 @@
 #pragma once
 // Shared plumbing of the normalflow subcommands: terminal progress, Ctrl-C, JSON output, exit codes.
+#include <CLI/CLI.hpp>
+
 #include <chrono>
+#include <memory>
 #include <string>
 
 #include "core/progress.h"
@@ -62,5 +65,20 @@ private:
 /// Runs fn, mapping normalflow's exceptions to one line on stderr and an exit status:
 /// 0 ok, 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled.
 int guarded(const char* command, int (*fn)(void*), void* ctx);
+
+/// Adds --json and --quiet to a subcommand.
+void add_output_flags(CLI::App* cmd, OutputFlags& out);
+
+/// Makes cmd run fn(*args) under guarded() once parsed; the exit status reaches main() as a
+/// CLI::RuntimeError, which CLI::App::exit returns without printing.
+template <class Args>
+void on_run(CLI::App* cmd, std::shared_ptr<Args> args, int (*fn)(const Args&)) {
+    cmd->final_callback([cmd, args, fn] {
+        struct Ctx { int (*fn)(const Args&); const Args* args; } ctx{fn, args.get()};
+        const int status = guarded(cmd->get_name().c_str(),
+                                   [](void* p) { auto* c = static_cast<Ctx*>(p); return c->fn(*c->args); }, &ctx);
+        throw CLI::RuntimeError(status);
+    });
+}
 
 }  // namespace normalflow::cli

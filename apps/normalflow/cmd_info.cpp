@@ -1,5 +1,7 @@
 // normalflow info IN [--self-intersections] [--json]: what a mesh file holds, and its defects.
 #include <cstdio>
+#include <memory>
+#include <string>
 
 #include "commands.h"
 #include "core/mesh_report.h"
@@ -9,6 +11,14 @@
 #endif
 
 namespace normalflow::cli {
+
+namespace {
+
+struct InfoArgs {
+    std::string input;
+    bool self_intersections = false;  ///< also count intersecting triangle pairs (CGAL; slower)
+    OutputFlags out;
+};
 
 int run_info(const InfoArgs& a) {
     Stopwatch clock;
@@ -63,6 +73,18 @@ int run_info(const InfoArgs& a) {
     for (const auto& s : info.warnings) std::printf("  warning: %s\n", s.c_str());
     for (const auto& s : r.warnings) std::printf("  warning: %s\n", s.c_str());
     return 0;
+}
+
+}  // namespace
+
+void add_info_command(CLI::App& app) {
+    auto args = std::make_shared<InfoArgs>();
+    auto* cmd = app.add_subcommand("info", "report what a mesh file holds: counts, defects, topology");
+    cmd->add_option("IN", args->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
+    cmd->add_flag("--self-intersections", args->self_intersections,
+                  "also count intersecting triangle pairs (slower)");
+    add_output_flags(cmd, args->out);
+    on_run(cmd, args, run_info);
 }
 
 }  // namespace normalflow::cli

@@ -1,17 +1,15 @@
 #pragma once
-// The subcommands of the normalflow tool. main.cpp parses flags into these structs (the library's own
-// option structs where one exists) and calls run_*; each run_* lives in its own cmd_*.cpp.
-#include <string>
-
+// The subcommands of the normalflow tool. Each add_*_command registers one subcommand on the app:
+// its flags (parsed into the library's option structs where one exists) and its run function.
+// Each lives in its own cmd_*.cpp; adding a command is one line here, one in main.cpp and one in
+// CMakeLists.txt.
 #include "cli_support.h"
 
 namespace normalflow::cli {
 
-struct InfoArgs {
-    std::string input;
-    bool self_intersections = false;  ///< also count intersecting triangle pairs (CGAL; slower)
-    OutputFlags out;
-};
-int run_info(const InfoArgs& a);
+void add_info_command(CLI::App& app);      // cmd_info.cpp
+void add_voxelize_command(CLI::App& app);  // cmd_pipeline.cpp
+void add_extract_command(CLI::App& app);   // cmd_pipeline.cpp
+void add_smooth_command(CLI::App& app);    // cmd_pipeline.cpp
 
 }  // namespace normalflow::cli

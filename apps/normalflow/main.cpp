@@ -1,45 +1,29 @@
 // normalflow: geometric surface processing via normal maps (Tasdizen et al. 2003).
-// Thin command-line front end: parse flags into the library's option structs, run, map errors to exit codes.
+// Thin command-line front end: each subcommand lives in its own cmd_*.cpp, which parses flags into
+// the library's option structs, runs, and maps errors to exit codes (see cli_support.h).
 #include <CLI/CLI.hpp>
 
-#include <cstdio>
 #include <string>
 
 #include "commands.h"
 #include "core/version.h"
 
-namespace {
-using namespace normalflow::cli;
-
-void add_output_flags(CLI::App* cmd, OutputFlags& out) {
-    cmd->add_flag("--json", out.json, "print one JSON object on the last line of standard output");
-    cmd->add_flag("-q,--quiet", out.quiet, "print nothing but errors");
-}
-
-template <class Args>
-int dispatch(const char* name, int (*run)(const Args&), const Args& args) {
-    struct Ctx { int (*run)(const Args&); const Args* args; } ctx{run, &args};
-    return guarded(name, [](void* p) { auto* c = static_cast<Ctx*>(p); return c->run(*c->args); }, &ctx);
-}
-}  // namespace
-
 int main(int argc, char** argv) {
+    using namespace normalflow::cli;
     CLI::App app{"normalflow: geometric surface processing via normal maps (Tasdizen et al. 2003)"};
     app.set_version_flag("--version", std::string("normalflow ") + normalflow::version());
     app.require_subcommand(1);
+    // One line per subcommand (declared in commands.h).
+    add_info_command(app);
+    add_voxelize_command(app);
+    add_extract_command(app);
+    add_smooth_command(app);
 
-    InfoArgs info;
-    auto* c_info = app.add_subcommand("info", "report what a mesh file holds: counts, defects, topology");
-    c_info->add_option("IN", info.input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
-    c_info->add_flag("--self-intersections", info.self_intersections, "also count intersecting triangle pairs (slower)");
-    add_output_flags(c_info, info.out);
-
+    install_interrupt_handler();
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        return app.exit(e);  // parse errors print usage; RuntimeError carries the command's status
     }
-    install_interrupt_handler();
-    if (*c_info) return dispatch("info", run_info, info);
-    return 1;
+    return 0;
 }

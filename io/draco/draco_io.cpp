@@ -1,0 +1,345 @@
+#include "io/draco/draco_io.h"
+
+#include <draco/compression/decode.h>
+#include <draco/compression/encode.h>
+#include <draco/io/gltf_encoder.h>
+#include <draco/io/mesh_io.h>
+#include <draco/mesh/mesh.h>
+
+#include <algorithm>
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "io/formats/atomic_file.h"
+
+namespace normalflow {
+
+namespace {
+
+std::vector<char> read_all(const std::string& path, const std::string& who) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) throw IoError(who + ": " + path + ": cannot open (" + std::strerror(errno) + ")");
+    std::vector<char> data;
+    char buf[1 << 16];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) data.insert(data.end(), buf, buf + n);
+    const bool err = std::ferror(f) != 0;
+    std::fclose(f);
+    if (err) throw IoError(who + ": " + path + ": read error");
+    if (data.empty()) throw InvalidInput(who + ": " + path + ": empty file");
+    return data;
+}
+
+std::uint32_t le32(const char* p) {
+    unsigned char b[4];
+    std::memcpy(b, p, 4);
+    return std::uint32_t(b[0]) | (std::uint32_t(b[1]) << 8) | (std::uint32_t(b[2]) << 16) | (std::uint32_t(b[3]) << 24);
+}
+
+constexpr std::uint32_t kGlbMagic = 0x46546C67;  // "glTF"
+constexpr std::uint32_t kChunkJson = 0x4E4F534A;
+constexpr std::uint32_t kChunkBin = 0x004E4942;
+
+bool is_glb(const std::vector<char>& d) { return d.size() >= 4 && le32(d.data()) == kGlbMagic; }
+
+/// Checks the GLB container layout so that truncated or damaged files get a clear message before
+/// the bytes reach Draco's glTF parser.
+void check_glb(const std::vector<char>& d, const std::string& who) {
+    const std::uint64_t size = d.size();
+    if (size < 12) throw InvalidInput(who + ": truncated GLB header (" + std::to_string(size) + " bytes, expected 12)");
+    if (le32(d.data()) != kGlbMagic) throw InvalidInput(who + ": not a GLB file (bad magic)");
+    const std::uint32_t version = le32(d.data() + 4), length = le32(d.data() + 8);
+    if (version != 2) throw InvalidInput(who + ": GLB version " + std::to_string(version) + ", expected 2");
+    if (length != size)
+        throw InvalidInput(who + ": GLB header says " + std::to_string(length) + " bytes, the file has " +
+                           std::to_string(size) + (length > size ? " (truncated)" : ""));
+    std::uint64_t off = 12;
+    int chunk = 0;
+    while (off < size) {
+        if (size - off < 8) throw InvalidInput(who + ": truncated GLB chunk header at byte " + std::to_string(off));
+        const std::uint32_t clen = le32(d.data() + off), ctype = le32(d.data() + off + 4);
+        if (clen > size - off - 8)
+            throw InvalidInput(who + ": GLB chunk " + std::to_string(chunk) + " claims " + std::to_string(clen) +
+                               " bytes, only " + std::to_string(size - off - 8) + " remain (truncated)");
+        if (chunk == 0 && ctype != kChunkJson) throw InvalidInput(who + ": first GLB chunk is not JSON");
+        if (chunk == 0 && clen == 0) throw InvalidInput(who + ": empty GLB JSON chunk");
+        if (chunk == 1 && ctype != kChunkBin) throw InvalidInput(who + ": second GLB chunk is not BIN");
+        off += 8 + std::uint64_t(clen);
+        ++chunk;
+    }
+    if (chunk == 0) throw InvalidInput(who + ": GLB file has no JSON chunk");
+}
+
+/// Copies POSITION and faces of a decoded Draco mesh; validates.
+Mesh to_mesh(const draco::Mesh& dm, const std::string& who) {
+    const draco::PointAttribute* pa = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
+    if (!pa) throw InvalidInput(who + ": no POSITION attribute");
+    if (pa->num_components() < 3) throw InvalidInput(who + ": POSITION has " + std::to_string(pa->num_components()) +
+                                                     " components, expected 3");
+    if (dm.num_faces() == 0) throw InvalidInput(who + ": no triangles (point cloud or non-triangle primitives)");
+    Mesh m;
+    const std::size_t nv = pa->size();
+    m.positions.resize(nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+        float p[3];
+        if (!pa->ConvertValue<float>(draco::AttributeValueIndex(std::uint32_t(i)), 3, p))
+            throw InvalidInput(who + ": cannot convert POSITION value " + std::to_string(i));
+        m.positions[i] = {p[0], p[1], p[2]};
+        if (!is_finite(m.positions[i])) throw InvalidInput(who + ": point " + std::to_string(i) + " is not finite");
+    }
+    m.triangles.resize(dm.num_faces());
+    for (std::uint32_t f = 0; f < dm.num_faces(); ++f) {
+        const auto& face = dm.face(draco::FaceIndex(f));
+        for (int c = 0; c < 3; ++c) {
+            if (face[c].value() >= dm.num_points())
+                throw InvalidInput(who + ": triangle " + std::to_string(f) + " references point " +
+                                   std::to_string(face[c].value()) + " of " + std::to_string(dm.num_points()));
+            const std::uint32_t v = pa->mapped_index(face[c]).value();
+            if (v >= nv) throw InvalidInput(who + ": triangle " + std::to_string(f) + " has an invalid position index");
+            m.triangles[f][std::size_t(c)] = v;
+        }
+    }
+    return m;
+}
+
+void check_options(const DracoOptions& opt, const std::string& who) {
+    if (opt.position_bits < 1 || opt.position_bits > 30)
+        throw InvalidInput(who + ": position_bits " + std::to_string(opt.position_bits) + " out of range [1, 30]");
+    if (opt.normal_bits < 1 || opt.normal_bits > 30)
+        throw InvalidInput(who + ": normal_bits " + std::to_string(opt.normal_bits) + " out of range [1, 30]");
+    if (opt.compression_level < 0 || opt.compression_level > 10)
+        throw InvalidInput(who + ": compression_level " + std::to_string(opt.compression_level) + " out of range [0, 10]");
+}
+
+/// Builds a Draco mesh from m (validated), with equal positions merged.
+std::unique_ptr<draco::Mesh> to_draco(const Mesh& m, const std::string& who) {
+    const std::size_t nv = m.positions.size(), nf = m.triangles.size();
+    if (nv == 0 || nf == 0)
+        throw InvalidInput(who + ": empty mesh (" + std::to_string(nv) + " points, " + std::to_string(nf) + " triangles)");
+    if (nv > std::size_t(std::numeric_limits<std::int32_t>::max()) || nf > std::size_t(std::numeric_limits<std::int32_t>::max()))
+        throw InvalidInput(who + ": mesh too large for Draco");
+    auto dm = std::make_unique<draco::Mesh>();
+    dm->set_num_points(std::uint32_t(nv));
+    draco::GeometryAttribute ga;
+    ga.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, sizeof(float) * 3, 0);
+    const int id = dm->AddAttribute(ga, true, std::uint32_t(nv));
+    draco::PointAttribute* pa = dm->attribute(id);
+    for (std::size_t i = 0; i < nv; ++i) {
+        const Vec3f& p = m.positions[i];
+        if (!is_finite(p)) throw InvalidInput(who + ": point " + std::to_string(i) + " is not finite");
+        const float xyz[3] = {p.x, p.y, p.z};
+        pa->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), xyz);
+    }
+    for (std::size_t f = 0; f < nf; ++f) {
+        const Tri& t = m.triangles[f];
+        for (std::uint32_t idx : t)
+            if (idx >= nv)
+                throw InvalidInput(who + ": triangle " + std::to_string(f) + " has index " + std::to_string(idx) +
+                                   ", expected < " + std::to_string(nv));
+        dm->AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
+    }
+    dm->DeduplicateAttributeValues();
+    dm->DeduplicatePointIds();
+    return dm;
+}
+
+/// Encodes dm as a Draco bitstream (edgebreaker; sequential if edgebreaker fails).
+draco::EncoderBuffer encode(const draco::Mesh& dm, const DracoOptions& opt, const std::string& who) {
+    draco::Encoder enc;
+    enc.SetAttributeQuantization(draco::GeometryAttribute::POSITION, opt.position_bits);
+    enc.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, opt.normal_bits);
+    const int speed = 10 - opt.compression_level;
+    enc.SetSpeedOptions(speed, speed);
+    enc.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
+    draco::EncoderBuffer buf;
+    draco::Status st = enc.EncodeMeshToBuffer(dm, &buf);
+    if (!st.ok()) {
+        buf.Clear();
+        enc.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
+        st = enc.EncodeMeshToBuffer(dm, &buf);
+    }
+    if (!st.ok()) throw InvalidInput(who + ": Draco encoding failed (" + st.error_msg_string() + ")");
+    return buf;
+}
+
+void write_buffer(const std::string& path, const char* who, const char* data, std::size_t size) {
+    AtomicFile f(path, who);
+    f.write(data, size);
+    f.commit();
+}
+
+std::string float_text(float x) {
+    char buf[32];
+    for (int prec = 6; prec <= 9; ++prec) {
+        std::snprintf(buf, sizeof buf, "%.*g", prec, double(x));
+        if (std::strtof(buf, nullptr) == x) break;
+    }
+    return buf;
+}
+
+void append_u32(std::string& s, std::uint32_t v) {
+    for (int b = 0; b < 4; ++b) s.push_back(char((v >> (8 * b)) & 0xFF));
+}
+
+/// GLB with a Draco-compressed primitive plus uncompressed fallback buffers (hand-built).
+std::string draco_glb_with_fallback(const draco::Mesh& dm, const DracoOptions& opt, const std::string& who) {
+    const draco::EncoderBuffer enc = encode(dm, opt, who);
+    // The fallback accessors must describe the points in the order the Draco decoder yields them.
+    draco::DecoderBuffer in;
+    in.Init(enc.data(), enc.size());
+    draco::Decoder dec;
+    auto res = dec.DecodeMeshFromBuffer(&in);
+    if (!res.ok()) throw InvalidInput(who + ": Draco round trip failed (" + res.status().error_msg_string() + ")");
+    const std::unique_ptr<draco::Mesh> d = std::move(res).value();
+    const draco::PointAttribute* pa = d->GetNamedAttribute(draco::GeometryAttribute::POSITION);
+    if (!pa) throw InvalidInput(who + ": Draco round trip lost POSITION");
+    const std::uint32_t np = d->num_points(), nf = d->num_faces();
+    std::string bin(enc.data(), enc.size());
+    while (bin.size() % 4) bin.push_back('\0');
+    const std::size_t pos_off = bin.size();
+    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
+    float hi[3] = {-lo[0], -lo[1], -lo[2]};
+    for (std::uint32_t p = 0; p < np; ++p) {
+        float xyz[3];
+        pa->ConvertValue<float>(pa->mapped_index(draco::PointIndex(p)), 3, xyz);
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], xyz[a]);
+            hi[a] = std::max(hi[a], xyz[a]);
+            append_u32(bin, std::bit_cast<std::uint32_t>(xyz[a]));
+        }
+    }
+    const std::size_t idx_off = bin.size();
+    for (std::uint32_t f = 0; f < nf; ++f)
+        for (int c = 0; c < 3; ++c) append_u32(bin, d->face(draco::FaceIndex(f))[c].value());
+    const std::size_t pos_len = idx_off - pos_off, idx_len = bin.size() - idx_off;
+    std::string json;
+    json += R"({"asset":{"version":"2.0","generator":"normalflow"},"extensionsUsed":["KHR_draco_mesh_compression"],)";
+    json += R"("scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)";
+    json += R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"mode":4,)";
+    json += R"("extensions":{"KHR_draco_mesh_compression":{"bufferView":0,"attributes":{"POSITION":)" +
+            std::to_string(pa->unique_id()) + "}}}}]}],";
+    json += R"("accessors":[{"bufferView":1,"componentType":5126,"count":)" + std::to_string(np) +
+            R"(,"type":"VEC3","min":[)" + float_text(lo[0]) + "," + float_text(lo[1]) + "," + float_text(lo[2]) +
+            "],\"max\":[" + float_text(hi[0]) + "," + float_text(hi[1]) + "," + float_text(hi[2]) + "]},";
+    json += R"({"bufferView":2,"componentType":5125,"count":)" + std::to_string(3 * std::uint64_t(nf)) +
+            R"(,"type":"SCALAR"}],)";
+    json += R"("bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":)" + std::to_string(enc.size()) + "},";
+    json += R"({"buffer":0,"byteOffset":)" + std::to_string(pos_off) + R"(,"byteLength":)" + std::to_string(pos_len) +
+            R"(,"target":34962},)";
+    json += R"({"buffer":0,"byteOffset":)" + std::to_string(idx_off) + R"(,"byteLength":)" + std::to_string(idx_len) +
+            R"(,"target":34963}],)";
+    json += R"("buffers":[{"byteLength":)" + std::to_string(bin.size()) + "}]}";
+    while (json.size() % 4) json.push_back(' ');
+    const std::uint64_t total = 12 + 8 + json.size() + 8 + bin.size();
+    if (total > std::numeric_limits<std::uint32_t>::max()) throw InvalidInput(who + ": mesh too large for GLB");
+    std::string out;
+    out.reserve(std::size_t(total));
+    append_u32(out, kGlbMagic);
+    append_u32(out, 2);
+    append_u32(out, std::uint32_t(total));
+    append_u32(out, std::uint32_t(json.size()));
+    append_u32(out, kChunkJson);
+    out += json;
+    append_u32(out, std::uint32_t(bin.size()));
+    append_u32(out, kChunkBin);
+    out += bin;
+    return out;
+}
+
+}  // namespace
+
+Mesh read_gltf(const std::string& path, ReadInfo* info) {
+    const std::string who = "read_gltf: " + path;
+    const std::vector<char> data = read_all(path, "read_gltf");
+    const bool glb = is_glb(data);
+    std::string ext = path.size() >= 4 ? path.substr(path.size() - 4) : std::string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext == ".glb" && !glb) throw InvalidInput(who + ": not a GLB file (bad magic)");
+    if (glb) check_glb(data, who);
+    // draco::ReadMeshFromFile runs draco::GltfDecoder::DecodeFromFile (all nodes, transforms applied).
+    // (Including draco/io/gltf_decoder.h directly would need tiny_gltf.h, which Debian does not ship
+    // with libdraco-dev, and would have to match the copy compiled into libdraco exactly.)
+    std::unique_ptr<draco::Mesh> dm;
+    try {
+        auto res = draco::ReadMeshFromFile(path);
+        if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
+        dm = std::move(res).value();
+    } catch (const InvalidInput&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InvalidInput(who + ": malformed glTF (" + e.what() + ")");
+    }
+    if (!dm) throw InvalidInput(who + ": no mesh decoded");
+    Mesh m = to_mesh(*dm, who);
+    if (info) {
+        info->format = glb ? "glb" : "gltf";
+        info->file_vertices = m.positions.size();
+        info->file_faces = m.triangles.size();
+    }
+    return m;
+}
+
+Mesh read_drc(const std::string& path, ReadInfo* info) {
+    const std::string who = "read_drc: " + path;
+    const std::vector<char> data = read_all(path, "read_drc");
+    if (data.size() < 5 || std::memcmp(data.data(), "DRACO", 5) != 0)
+        throw InvalidInput(who + ": not a Draco file (expected magic \"DRACO\")");
+    draco::DecoderBuffer buf;
+    buf.Init(data.data(), data.size());
+    auto type = draco::Decoder::GetEncodedGeometryType(&buf);
+    if (!type.ok()) throw InvalidInput(who + ": " + type.status().error_msg_string());
+    if (type.value() != draco::TRIANGULAR_MESH) throw InvalidInput(who + ": not a triangle mesh (point cloud?)");
+    draco::Decoder dec;
+    auto res = dec.DecodeMeshFromBuffer(&buf);
+    if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
+    const std::unique_ptr<draco::Mesh> dm = std::move(res).value();
+    Mesh m = to_mesh(*dm, who);
+    if (info) {
+        info->format = "drc";
+        info->file_vertices = m.positions.size();
+        info->file_faces = m.triangles.size();
+    }
+    return m;
+}
+
+void write_drc(const std::string& path, const Mesh& m, const DracoOptions& opt) {
+    const std::string who = "write_drc: " + path;
+    check_options(opt, who);
+    const auto dm = to_draco(m, who);
+    const draco::EncoderBuffer buf = encode(*dm, opt, who);
+    write_buffer(path, "write_drc", buf.data(), buf.size());
+}
+
+void write_draco_glb(const std::string& path, const Mesh& m, const DracoOptions& opt) {
+    const std::string who = "write_draco_glb: " + path;
+    check_options(opt, who);
+    const auto dm = to_draco(m, who);
+    if (opt.fallback) {
+        const std::string glb = draco_glb_with_fallback(*dm, opt, who);
+        write_buffer(path, "write_draco_glb", glb.data(), glb.size());
+        return;
+    }
+    draco::DracoCompressionOptions co;
+    co.compression_level = opt.compression_level;
+    co.quantization_position.SetQuantizationBits(opt.position_bits);
+    co.quantization_bits_normal = opt.normal_bits;
+    dm->SetCompressionEnabled(true);
+    dm->SetCompressionOptions(co);
+    draco::GltfEncoder enc;
+    draco::EncoderBuffer buf;
+    const draco::Status st = enc.EncodeToBuffer(*dm, &buf);
+    if (!st.ok()) throw InvalidInput(who + ": Draco glTF encoding failed (" + st.error_msg_string() + ")");
+    write_buffer(path, "write_draco_glb", buf.data(), buf.size());
+}
+
+}  // namespace normalflow

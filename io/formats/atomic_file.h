@@ -29,6 +29,9 @@ public:
     void commit();
 
     const std::string& path() const { return path_; }
+    /// The temporary file, for libraries that can only write by file name (e.g. OpenVDB's io::File):
+    /// let them (over)write temp_path() without using stream(), then call commit().
+    const std::string& temp_path() const { return tmp_; }
 
 private:
     std::string path_, tmp_, who_;

@@ -44,6 +44,14 @@ public:
     /// The member `key` of an object, inserted as null if absent.
     Json& operator[](const std::string& key);
 
+    /// The string values of an array (other elements skipped), e.g. a report's warnings.
+    std::vector<std::string> strings() const {
+        std::vector<std::string> out;
+        for (const auto& m : members_)
+            if (m.second.kind_ == Kind::String) out.push_back(m.second.s_);
+        return out;
+    }
+
     /// Compact single-line serialisation.
     std::string dump() const;
 

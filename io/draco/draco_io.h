@@ -1,0 +1,58 @@
+#pragma once
+/// \file draco_io.h
+/// glTF 2.0 (.gltf, .glb) reading and Draco (.drc, Draco-compressed .glb) reading and writing, through
+/// Google's Draco library (Apache-2.0; Debian's build with glTF support). Draco types stay in the .cpp.
+///
+/// Draco stores positions quantized to `position_bits` bits per axis over the bounding box, so a
+/// written point moves by at most bbox_extent / (2^bits - 1) / 2 per axis (about 1.5e-4 of the box at
+/// 14 bits), and it may reorder points and triangles (triangle orientation is kept).
+
+#include <string>
+
+#include "core/mesh.h"
+#include "io/io.h"
+
+namespace normalflow {
+
+/// Options for Draco compression (write_drc, write_draco_glb).
+struct DracoOptions {
+    int position_bits = 14;     ///< bits per position axis, 1..30 (0 = lossless float storage is NOT supported)
+    int normal_bits = 10;       ///< bits per normal component, 1..30 (normalflow meshes carry no normals;
+                                ///< kept for files with normals and future use)
+    int compression_level = 7;  ///< 0 (fastest, largest) .. 10 (slowest, smallest); Draco speed = 10 - level
+    bool fallback = false;      ///< write_draco_glb only: also store uncompressed (dequantized) positions and
+                                ///< indices, and list KHR_draco_mesh_compression as used but not required,
+                                ///< so viewers without Draco can still show the mesh (file grows ~4x)
+};
+
+/// Reads all triangle primitives of all nodes of the default scene of a .gltf or .glb file, with
+/// each node's transform (matrix or TRS, composed down the node tree) applied to the positions.
+/// Primitives compressed with KHR_draco_mesh_compression are decoded. Only POSITION is kept.
+/// Equal positions are merged into one point (Draco's glTF reader does this).
+/// A .glb container is checked first (magic, version 2, length, chunk layout) for clear messages.
+/// \param info  optional: format ("gltf"/"glb"), file_vertices (points after merging), file_faces
+/// \throw IoError if the file cannot be opened or read; InvalidInput naming the file for anything
+///        else: truncated or garbage files, non-triangle primitives, missing buffers, no triangles,
+///        non-finite positions.
+/// Cost: linear in the file size. Single-threaded.
+Mesh read_gltf(const std::string& path, ReadInfo* info = nullptr);
+
+/// Reads a Draco (.drc) triangle mesh: POSITION only, dequantized to float.
+/// \param info  optional: format "drc", file_vertices, file_faces
+/// \throw IoError if the file cannot be opened or read; InvalidInput naming the file for truncated or
+///        garbage data, point clouds (no faces), a missing POSITION attribute, non-finite positions.
+Mesh read_drc(const std::string& path, ReadInfo* info = nullptr);
+
+/// Writes m as a Draco (.drc) bitstream (edgebreaker connectivity coding, falling back to sequential
+/// coding for meshes edgebreaker rejects), atomically (temporary file + rename).
+/// \throw InvalidInput for empty meshes, out-of-range indices, non-finite positions or options out of
+///        range; IoError if the file cannot be written.
+void write_drc(const std::string& path, const Mesh& m, const DracoOptions& opt = {});
+
+/// Writes m as a binary glTF 2.0 file whose primitive is compressed with KHR_draco_mesh_compression
+/// (through draco::GltfEncoder; with opt.fallback, a hand-built GLB that also holds uncompressed
+/// buffers), atomically. Read it back with read_gltf.
+/// \throw as write_drc.
+void write_draco_glb(const std::string& path, const Mesh& m, const DracoOptions& opt = {});
+
+}  // namespace normalflow

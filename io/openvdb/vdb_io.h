@@ -1,0 +1,37 @@
+#pragma once
+/// \file vdb_io.h
+/// Reading and writing OpenVDB (.vdb) files (OpenVDB 10, MPL-2.0). OpenVDB types stay in the .cpp.
+
+#include <string>
+
+#include "core/volume.h"
+
+namespace normalflow {
+
+/// Reads the first FloatGrid of a .vdb file into a sparse Volume.
+///
+/// Level sets (and grids of unknown class, taken as signed distances, negative inside) are copied
+/// exactly: every VDB leaf becomes a stored 8^3 block with its 512 values, every other block a tile
+/// whose sign is the grid's value there; background = the grid's background, half_width =
+/// background / h. Fog volumes (density, larger inside) are first rebuilt as a level set of the
+/// 0.5 iso-surface with a half width of 3 voxels (openvdb::tools::levelSetRebuild).
+/// The grid extent is the normalflow_dims metadata written by write_vdb, else the bounding box of
+/// all leaves and active values, with its minimum rounded down to a multiple of 8 (so leaves map
+/// onto blocks). The transform must be linear, axis-aligned, with a uniform positive scale h.
+///
+/// \throw IoError if the file cannot be opened; InvalidInput naming the file for: not a VDB file,
+///        truncated or corrupt data, no float grid, an empty grid, a non-uniform / rotated /
+///        non-linear transform, a non-positive background, NaN/Inf values, or an extent too large.
+/// Cost: O(#leaves * 512 + #blocks of the extent). Call of openvdb::initialize() once (call_once).
+Volume read_vdb(const std::string& path);
+
+/// Writes v as a .vdb file holding one FloatGrid named "surface", class GRID_LEVEL_SET, background
+/// v.background, a linear transform with voxel size h and translation v.grid.origin (so index
+/// (i, j, k) is our sample (i, j, k)), metadata normalflow_dims and normalflow_half_width.
+/// Stored blocks become leaves (values with |phi| < background active), inside tiles become
+/// inactive -background tiles; the tree is then pruned. Written atomically (temporary file + rename).
+/// \throw InvalidInput for an empty grid or a non-positive voxel size/background; IoError if the
+///        file cannot be written.
+void write_vdb(const std::string& path, const Volume& v);
+
+}  // namespace normalflow

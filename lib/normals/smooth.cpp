@@ -1,0 +1,916 @@
+#include "normals/smooth.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/errors.h"
+
+namespace normalflow {
+
+const char* to_string(SmoothMode mode) {
+    switch (mode) {
+        case SmoothMode::Isotropic: return "isotropic";
+        case SmoothMode::Anisotropic: return "anisotropic";
+        case SmoothMode::HighBoost: return "highboost";
+        case SmoothMode::MeanCurvature: return "mcf";
+    }
+    return "unknown";
+}
+
+namespace detail {
+namespace {
+
+constexpr float kHalfWidth = 8.0f;      // engine band half width, voxels
+constexpr float kMaxDt = 1.0f / 6.0f;   // explicit stability bound of the 3-D second-order operators
+constexpr int L = 10;                   // local buffer: 8 + 2 halo
+constexpr int L2 = L * L;
+constexpr int L3 = L * L * L;
+constexpr int kStride[3] = {1, L, L2};
+
+constexpr int lidx(int x, int y, int z) { return (z + 1) * L2 + (y + 1) * L + (x + 1); }
+constexpr int bidx(int x, int y, int z) { return (z * kBlockDim + y) * kBlockDim + x; }
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+/// Where the halo of one block comes from: its 27 neighbour slots and, per axis and local
+/// coordinate -1..8, which neighbour and which in-block coordinate (clamped at the grid border).
+struct Neighbourhood {
+    std::int32_t slot[27];
+    std::uint8_t nb[3][L];
+    std::uint8_t li[3][L];
+    int ext[3];  // in-grid extent of the block itself
+};
+
+/// Per-thread scratch of the kernels.
+struct Scratch {
+    std::unique_ptr<float[]> buf;
+    explicit Scratch(std::size_t n) : buf(std::make_unique_for_overwrite<float[]>(n)) {}
+    float* at(int k) { return buf.get() + std::size_t(k) * L3; }
+};
+
+/// G(κ²), the penalty of the normal energy, and its derivative g.
+inline float penalty(SmoothMode mode, float k2, float inv2mu2) {
+    if (mode == SmoothMode::Anisotropic) return (1.0f - std::exp(-k2 * inv2mu2)) / inv2mu2;
+    return k2;
+}
+
+/// Face terms at the staggered point q + ½e_a (Appendix B, Eq. 43–47, 50): flux column m and κ².
+inline void face_terms(const float* P, const float* const N[3], int q, int sa, int sb, int sc, float m[3],
+                       float& k2) {
+    const int q1 = q + sa;
+    const float dphi = P[q1] - P[q];
+    const float gb = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q1 + sb] - P[q1 - sb]));
+    const float gc = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q1 + sc] - P[q1 - sc]));
+    const float g2 = dphi * dphi + gb * gb + gc * gc;
+    const float inv = 1.0f / std::max(g2, 1e-12f);
+    float dn2 = 0.0f, c2 = 0.0f;
+    for (int c = 0; c < 3; ++c) {
+        const float* Nc = N[c];
+        const float a = Nc[q1] - Nc[q];
+        const float b = 0.25f * ((Nc[q + sb] - Nc[q - sb]) + (Nc[q1 + sb] - Nc[q1 - sb]));
+        const float d = 0.25f * ((Nc[q + sc] - Nc[q - sc]) + (Nc[q1 + sc] - Nc[q1 - sc]));
+        const float C = (a * dphi + b * gb + d * gc) * inv;
+        m[c] = a - dphi * C;
+        dn2 += a * a + b * b + d * d;
+        c2 += C * C;
+    }
+    k2 = std::max(dn2 - c2 * g2, 0.0f);
+}
+
+class LevelSetEngine {
+public:
+    LevelSetEngine(const Volume& v, const SmoothOptions& opt, SmoothReport& rep, Progress* progress)
+        : grid_(v.grid), opt_(opt), rep_(rep), progress_(progress) {
+        block_dims_ = v.block_dims;
+        table_ = v.block_table;
+        coords_ = v.block_coords;
+        const float inv_h = float(1.0 / v.grid.voxel_size);
+        phi_.resize(v.values.size());
+        for (std::size_t i = 0; i < v.values.size(); ++i)
+            phi_[i] = std::clamp(v.values[i] * inv_h, -kHalfWidth, kHalfWidth);
+        inv2mu2_ = 1.0f / (2.0f * opt.mu * opt.mu);
+    }
+
+    bool has_surface() const {
+        for (std::size_t b = 0; b < coords_.size(); ++b) {
+            const float* p = phi_.data() + b * kBlockVoxels;
+            bool neg = false, pos = false;
+            for (int i = 0; i < kBlockVoxels; ++i) (p[i] < 0.0f ? neg : pos) = true;
+            if (neg && pos) return true;
+        }
+        // a surface can also lie between a block and an unallocated neighbour of the other sign
+        for (std::size_t b = 0; b < coords_.size(); ++b) {
+            const float s = phi_[b * kBlockVoxels];
+            for (int a = 0; a < 3; ++a)
+                for (int d = -1; d <= 1; d += 2) {
+                    auto c = coords_[b];
+                    c[a] += d;
+                    if (c[a] < 0 || c[a] >= block_dims_[a]) continue;
+                    const std::int32_t t = table_[tindex(c[0], c[1], c[2])];
+                    if ((t == kBlockInside && s >= 0.0f) || (t == kBlockOutside && s < 0.0f)) return true;
+                }
+        }
+        return false;
+    }
+
+    void run() {
+        const auto t_band = Clock::now();
+        update_band();
+        reinitialise();
+        rep_.seconds_reinit += seconds_since(t_band);
+        for (int it = 0; it < opt_.iterations; ++it) {
+            const auto t_it = Clock::now();
+            iteration_ = it;
+            build_active();
+            rep_.band_voxels.push_back(active_voxels_);
+            rep_.allocated_voxels.push_back(coords_.size() * kBlockVoxels);
+            if (opt_.mode == SmoothMode::MeanCurvature) {
+                const auto t0 = Clock::now();
+                std::fill(hn_.begin(), hn_.end(), 0.0f);
+                for (int s = 0; s < opt_.normal_steps; ++s) {
+                    refit_step(false);
+                    tick(double(s + 1) / opt_.normal_steps);
+                }
+                rep_.seconds_refit += seconds_since(t0);
+            } else {
+                const auto t0 = Clock::now();
+                normal_loop();
+                rep_.seconds_normals += seconds_since(t0);
+                const auto t1 = Clock::now();
+                refit_loop();
+                rep_.seconds_refit += seconds_since(t1);
+            }
+            const auto t2 = Clock::now();
+            update_band();
+            reinitialise();
+            rep_.seconds_reinit += seconds_since(t2);
+            rep_.seconds_per_iteration.push_back(seconds_since(t_it));
+            rep_.iterations = it + 1;
+        }
+    }
+
+    void write_back(Volume& v) const {
+        const float h = float(v.grid.voxel_size);
+        v.half_width = kHalfWidth;
+        v.background = float(kHalfWidth * v.grid.voxel_size);
+        v.block_table = table_;
+        v.block_coords = coords_;
+        v.values.resize(phi_.size());
+        for (std::size_t i = 0; i < phi_.size(); ++i) v.values[i] = phi_[i] * h;
+    }
+
+private:
+    // ---------------------------------------------------------------- layout helpers
+    std::size_t tindex(int bi, int bj, int bk) const {
+        return (std::size_t(bk) * block_dims_[1] + std::size_t(bj)) * block_dims_[0] + std::size_t(bi);
+    }
+    std::size_t nblocks() const { return coords_.size(); }
+
+    void neighbourhood(std::size_t b, Neighbourhood& n) const {
+        const auto& bc = coords_[b];
+        for (int a = 0; a < 3; ++a) {
+            n.ext[a] = std::min(kBlockDim, grid_.dims[a] - bc[a] * kBlockDim);
+            for (int l = -1; l <= kBlockDim; ++l) {
+                const int g = std::clamp(bc[a] * kBlockDim + l, 0, grid_.dims[a] - 1);
+                n.nb[a][l + 1] = std::uint8_t((g >> kBlockLog2) - bc[a] + 1);
+                n.li[a][l + 1] = std::uint8_t(g & (kBlockDim - 1));
+            }
+        }
+        for (int dz = 0; dz < 3; ++dz)
+            for (int dy = 0; dy < 3; ++dy)
+                for (int dx = 0; dx < 3; ++dx) {
+                    const int c[3] = {bc[0] + dx - 1, bc[1] + dy - 1, bc[2] + dz - 1};
+                    std::int32_t s = kBlockOutside;
+                    if (c[0] >= 0 && c[1] >= 0 && c[2] >= 0 && c[0] < block_dims_[0] && c[1] < block_dims_[1] &&
+                        c[2] < block_dims_[2])
+                        s = table_[tindex(c[0], c[1], c[2])];
+                    n.slot[(dz * 3 + dy) * 3 + dx] = s;
+                }
+    }
+
+    /// Copies field f (with halo 1) into out; unallocated blocks give t_in / t_out.
+    static void gather(const Neighbourhood& n, const float* f, float t_in, float t_out, float* out) {
+        int o = 0;
+        for (int z = 0; z < L; ++z) {
+            const int nz = n.nb[2][z], lz = n.li[2][z];
+            for (int y = 0; y < L; ++y) {
+                const int ny = n.nb[1][y], ly = n.li[1][y];
+                const int row = (lz * kBlockDim + ly) * kBlockDim;
+                for (int x = 0; x < L; ++x, ++o) {
+                    const std::int32_t s = n.slot[(nz * 3 + ny) * 3 + n.nb[0][x]];
+                    out[o] = s >= 0 ? f[std::size_t(s) * kBlockVoxels + row + n.li[0][x]]
+                                    : (s == kBlockInside ? t_in : t_out);
+                }
+            }
+        }
+    }
+    void gather_phi(const Neighbourhood& n, const std::vector<float>& f, float* out) const {
+        gather(n, f.data(), -kHalfWidth, kHalfWidth, out);
+    }
+    void gather_n(const Neighbourhood& n, const std::vector<float> (&f)[3], float* out0, float* out1,
+                  float* out2) const {
+        gather(n, f[0].data(), 0.0f, 0.0f, out0);
+        gather(n, f[1].data(), 0.0f, 0.0f, out1);
+        gather(n, f[2].data(), 0.0f, 0.0f, out2);
+    }
+
+    /// parallel_for over a list of block slots; body(slot, scratch).
+    template <class Body>
+    void for_blocks(const std::vector<std::int32_t>& list, int scratch_fields, Body&& body) const {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, list.size(), 2),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              Scratch s(std::size_t(scratch_fields) * L3);
+                              for (std::size_t i = r.begin(); i != r.end(); ++i) body(i, list[i], s);
+                          });
+    }
+
+    void tick(double frac_in_iteration) {
+        const double f = (iteration_ + std::clamp(frac_in_iteration, 0.0, 1.0)) / opt_.iterations;
+        detail::tick(progress_, f, "smooth_volume");
+    }
+
+    void fail(const char* what) const {
+        throw NumericalError(std::string("smooth_volume: non-finite ") + what + " at main iteration " +
+                             std::to_string(iteration_ + 1));
+    }
+
+    // ---------------------------------------------------------------- band
+    /// Blocks holding the surface (a sign change to a 6-neighbour, or |φ| < 1) plus their 26
+    /// neighbours stay or become allocated; every other block becomes a tile of its sign.
+    void update_band() {
+        const std::size_t nb = nblocks();
+        std::vector<std::uint8_t> surf(nb, 0);
+        std::vector<std::int32_t> all(nb);
+        for (std::size_t b = 0; b < nb; ++b) all[b] = std::int32_t(b);
+        for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* P = s.at(0);
+            gather_phi(n, phi_, P);
+            bool found = false;
+            for (int z = 0; z < n.ext[2] && !found; ++z)
+                for (int y = 0; y < n.ext[1] && !found; ++y)
+                    for (int x = 0; x < n.ext[0]; ++x) {
+                        const int q = lidx(x, y, z);
+                        const bool in = P[q] < 0.0f;
+                        if (std::abs(P[q]) < 1.0f || (P[q + 1] < 0.0f) != in || (P[q - 1] < 0.0f) != in ||
+                            (P[q + L] < 0.0f) != in || (P[q - L] < 0.0f) != in || (P[q + L2] < 0.0f) != in ||
+                            (P[q - L2] < 0.0f) != in) {
+                            found = true;
+                            break;
+                        }
+                    }
+            surf[std::size_t(b)] = found;
+        });
+        std::vector<std::uint8_t> req(table_.size(), 0);
+        for (std::size_t b = 0; b < nb; ++b) {
+            if (!surf[b]) continue;
+            const auto& c = coords_[b];
+            for (int dz = -1; dz <= 1; ++dz)
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const int x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
+                        if (x < 0 || y < 0 || z < 0 || x >= block_dims_[0] || y >= block_dims_[1] ||
+                            z >= block_dims_[2])
+                            continue;
+                        req[tindex(x, y, z)] = 1;
+                    }
+        }
+        std::vector<std::array<int, 3>> coords;
+        std::vector<float> phi;
+        std::vector<std::int32_t> table(table_.size());
+        std::size_t count = 0;
+        for (std::size_t t = 0; t < table_.size(); ++t) count += req[t];
+        coords.reserve(count);
+        phi.resize(count * kBlockVoxels);
+        for (int z = 0; z < block_dims_[2]; ++z)
+            for (int y = 0; y < block_dims_[1]; ++y)
+                for (int x = 0; x < block_dims_[0]; ++x) {
+                    const std::size_t t = tindex(x, y, z);
+                    const std::int32_t old = table_[t];
+                    if (req[t]) {
+                        const std::int32_t slot = std::int32_t(coords.size());
+                        coords.push_back({x, y, z});
+                        float* dst = phi.data() + std::size_t(slot) * kBlockVoxels;
+                        if (old >= 0)
+                            std::memcpy(dst, phi_.data() + std::size_t(old) * kBlockVoxels,
+                                        sizeof(float) * kBlockVoxels);
+                        else
+                            std::fill(dst, dst + kBlockVoxels, old == kBlockInside ? -kHalfWidth : kHalfWidth);
+                        table[t] = slot;
+                    } else if (old >= 0) {
+                        table[t] = phi_[std::size_t(old) * kBlockVoxels] < 0.0f ? kBlockInside : kBlockOutside;
+                    } else {
+                        table[t] = old;
+                    }
+                }
+        table_ = std::move(table);
+        coords_ = std::move(coords);
+        phi_ = std::move(phi);
+        const std::size_t n = phi_.size();
+        phi2_.resize(n);
+        for (int c = 0; c < 3; ++c) {
+            n_[c].resize(n);
+            n2_[c].resize(n);
+            aux_[c].resize(n);
+            if (opt_.mode == SmoothMode::Anisotropic && opt_.conductance_presmooth_steps > 0) gface_[c].resize(n);
+        }
+        hn_.resize(n);
+        mask_.resize(n);
+    }
+
+    /// φ ← signed distance in the band: interface samples keep φ/|∇φ| (bounded by the distance to
+    /// the axis crossings of the zero level), the others get Jacobi sweeps of the Godunov update.
+    void reinitialise() {
+        const std::size_t nb = nblocks();
+        std::vector<std::int32_t> all(nb);
+        for (std::size_t b = 0; b < nb; ++b) all[b] = std::int32_t(b);
+        std::vector<float>& u = phi2_;       // unsigned distance
+        std::vector<float>& u2 = aux_[0];    // ping-pong buffer
+        std::atomic<bool> bad{false};
+        for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* P = s.at(0);
+            gather_phi(n, phi_, P);
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const int q = lidx(x, y, z);
+                        const float p = P[q];
+                        const bool in = p < 0.0f;
+                        float bound = kHalfWidth;
+                        for (int a = 0; a < 3; ++a) {
+                            const int st = kStride[a];
+                            for (const float o : {P[q + st], P[q - st]})
+                                if ((o < 0.0f) != in) bound = std::min(bound, p / (p - o));
+                        }
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        if (bound < kHalfWidth) {
+                            const float gx = 0.5f * (P[q + 1] - P[q - 1]);
+                            const float gy = 0.5f * (P[q + L] - P[q - L]);
+                            const float gz = 0.5f * (P[q + L2] - P[q - L2]);
+                            const float gn = std::sqrt(gx * gx + gy * gy + gz * gz);
+                            float d = gn > 1e-6f ? std::abs(p) / gn : bound;
+                            d = std::min(d, bound);
+                            if (!std::isfinite(d)) bad = true;
+                            u[i] = d;
+                            mask_[i] = 1;
+                        } else {
+                            u[i] = kHalfWidth;
+                            mask_[i] = 0;
+                        }
+                    }
+        });
+        if (bad) fail("distance during reinitialisation");
+        std::vector<std::uint8_t> changed(nb);
+        const int max_passes = int(kHalfWidth * 3);
+        for (int pass = 0; pass < max_passes; ++pass) {
+            for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
+                Neighbourhood n;
+                neighbourhood(std::size_t(b), n);
+                float* U = s.at(0);
+                gather(n, u.data(), kHalfWidth, kHalfWidth, U);
+                const std::size_t base = std::size_t(b) * kBlockVoxels;
+                bool ch = false;
+                for (int z = 0; z < kBlockDim; ++z)
+                    for (int y = 0; y < kBlockDim; ++y)
+                        for (int x = 0; x < kBlockDim; ++x) {
+                            const std::size_t i = base + std::size_t(bidx(x, y, z));
+                            const int q = lidx(x, y, z);
+                            if (mask_[i]) {
+                                u2[i] = U[q];
+                                continue;
+                            }
+                            float a[3] = {std::min(U[q - 1], U[q + 1]), std::min(U[q - L], U[q + L]),
+                                          std::min(U[q - L2], U[q + L2])};
+                            std::sort(a, a + 3);
+                            float d = a[0] + 1.0f;
+                            if (d > a[1]) {
+                                const float s2 = a[0] + a[1];
+                                const float dd = a[0] - a[1];
+                                d = 0.5f * (s2 + std::sqrt(std::max(2.0f - dd * dd, 0.0f)));
+                                if (d > a[2]) {
+                                    const float s3 = a[0] + a[1] + a[2];
+                                    const float q2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+                                    d = (s3 + std::sqrt(std::max(s3 * s3 - 3.0f * (q2 - 1.0f), 0.0f))) / 3.0f;
+                                }
+                            }
+                            const float nu = std::min(U[q], d);
+                            if (nu < U[q]) ch = true;
+                            u2[i] = nu;
+                        }
+                changed[std::size_t(b)] = ch;
+            });
+            std::swap(phi2_, aux_[0]);  // u <-> u2 (references follow the buffers' names)
+            bool any = false;
+            for (std::size_t b = 0; b < nb; ++b) any |= changed[b] != 0;
+            if (!any) break;
+        }
+        // after the swaps the newest distances are in phi2_ (u refers to phi2_)
+        for (std::size_t i = 0; i < phi_.size(); ++i) {
+            const float d = std::min(phi2_[i], kHalfWidth);
+            phi_[i] = phi_[i] < 0.0f ? -d : d;
+        }
+    }
+
+    // ---------------------------------------------------------------- active band
+    void build_active() {
+        active_.clear();
+        active_voxels_ = 0;
+        const float band = opt_.active_band;
+        for (std::size_t b = 0; b < nblocks(); ++b) {
+            const auto& c = coords_[b];
+            int ext[3];
+            for (int a = 0; a < 3; ++a) ext[a] = std::min(kBlockDim, grid_.dims[a] - c[a] * kBlockDim);
+            std::size_t cnt = 0;
+            const std::size_t base = b * kBlockVoxels;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        const bool a = x < ext[0] && y < ext[1] && z < ext[2] && std::abs(phi_[i]) <= band;
+                        mask_[i] = a;
+                        cnt += a;
+                    }
+            if (cnt) active_.push_back(std::int32_t(b));
+            active_voxels_ += cnt;
+        }
+    }
+
+    // ---------------------------------------------------------------- normals
+    void init_normals() {
+        std::vector<std::int32_t> all(nblocks());
+        for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
+        for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* P = s.at(0);
+            gather_phi(n, phi_, P);
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const int q = lidx(x, y, z);
+                        const float gx = 0.5f * (P[q + 1] - P[q - 1]);
+                        const float gy = 0.5f * (P[q + L] - P[q - L]);
+                        const float gz = 0.5f * (P[q + L2] - P[q - L2]);
+                        const float gn = std::sqrt(gx * gx + gy * gy + gz * gz);
+                        const float inv = gn > 1e-6f ? 1.0f / gn : 0.0f;
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        n_[0][i] = gx * inv;
+                        n_[1][i] = gy * inv;
+                        n_[2][i] = gz * inv;
+                    }
+        });
+    }
+
+    enum class Conductance { One, Live, Frozen };
+
+    /// One step of the normal loop on src → dst over the active blocks; returns G(src).
+    /// update == false: only the energy.
+    double normal_step(std::vector<float> (&src)[3], std::vector<float> (&dst)[3], Conductance cond,
+                       bool update) {
+        std::vector<double> energy(active_.size(), 0.0);
+        std::atomic<bool> bad{false};
+        const float dt = std::min(opt_.normal_dt, kMaxDt);
+        const float inv2mu2 = inv2mu2_;
+        const SmoothMode emode = cond == Conductance::Live ? SmoothMode::Anisotropic : SmoothMode::Isotropic;
+        const float band = opt_.active_band;
+        for_blocks(active_, cond == Conductance::Frozen ? 16 : 13, [&](std::size_t k, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* P = s.at(0);
+            float* N[3] = {s.at(1), s.at(2), s.at(3)};
+            float* F[3][3] = {{s.at(4), s.at(5), s.at(6)}, {s.at(7), s.at(8), s.at(9)}, {s.at(10), s.at(11), s.at(12)}};
+            float* G[3] = {nullptr, nullptr, nullptr};
+            gather_phi(n, phi_, P);
+            gather_n(n, src, N[0], N[1], N[2]);
+            if (cond == Conductance::Frozen) {
+                for (int a = 0; a < 3; ++a) {
+                    G[a] = s.at(13 + a);
+                    gather(n, gface_[a].data(), 1.0f, 1.0f, G[a]);
+                }
+            }
+            const float* Nc[3] = {N[0], N[1], N[2]};
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            double e = 0.0;
+            for (int a = 0; a < 3; ++a) {
+                const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
+                int lo[3] = {0, 0, 0};
+                lo[a] = -1;
+                for (int z = lo[2]; z < kBlockDim; ++z)
+                    for (int y = lo[1]; y < kBlockDim; ++y)
+                        for (int x = lo[0]; x < kBlockDim; ++x) {
+                            const int q = lidx(x, y, z);
+                            if (std::abs(P[q]) > band && std::abs(P[q + sa]) > band) {
+                                F[a][0][q] = F[a][1][q] = F[a][2][q] = 0.0f;
+                                continue;
+                            }
+                            float m[3], k2;
+                            face_terms(P, Nc, q, sa, sb, sc, m, k2);
+                            float g = 1.0f;
+                            if (cond == Conductance::Live) g = std::exp(-k2 * inv2mu2);
+                            else if (cond == Conductance::Frozen) g = G[a][q];
+                            F[a][0][q] = g * m[0];
+                            F[a][1][q] = g * m[1];
+                            F[a][2][q] = g * m[2];
+                            // energy of the faces owned by the active samples of this block
+                            if (x >= 0 && y >= 0 && z >= 0 && mask_[base + std::size_t(bidx(x, y, z))])
+                                e += cond == Conductance::Frozen ? double(g) * k2 : double(penalty(emode, k2, inv2mu2));
+                        }
+            }
+            energy[k] = e;
+            if (!update) return;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        const int q = lidx(x, y, z);
+                        if (!mask_[i]) {
+                            dst[0][i] = N[0][q];
+                            dst[1][i] = N[1][q];
+                            dst[2][i] = N[2][q];
+                            continue;
+                        }
+                        float phi_v[3];
+                        for (int c = 0; c < 3; ++c)
+                            phi_v[c] = (F[0][c][q] - F[0][c][q - 1]) + (F[1][c][q] - F[1][c][q - L]) +
+                                       (F[2][c][q] - F[2][c][q - L2]);
+                        const float nx = N[0][q], ny = N[1][q], nz = N[2][q];
+                        const float pn = phi_v[0] * nx + phi_v[1] * ny + phi_v[2] * nz;
+                        float ux = nx + dt * (phi_v[0] - pn * nx);
+                        float uy = ny + dt * (phi_v[1] - pn * ny);
+                        float uz = nz + dt * (phi_v[2] - pn * nz);
+                        const float len = std::sqrt(ux * ux + uy * uy + uz * uz);
+                        if (!std::isfinite(len)) bad = true;
+                        if (len > 1e-6f) {
+                            ux /= len;
+                            uy /= len;
+                            uz /= len;
+                        }
+                        dst[0][i] = ux;
+                        dst[1][i] = uy;
+                        dst[2][i] = uz;
+                    }
+        });
+        if (bad) fail("normal in the normal loop");
+        double sum = 0.0;
+        for (const double e : energy) sum += e;
+        return sum;
+    }
+
+    /// g at every face q+½e_a of the allocated samples, from the normals in src (Catté et al.).
+    void conductance_from(std::vector<float> (&src)[3]) {
+        const float inv2mu2 = inv2mu2_;
+        std::vector<std::int32_t> all(nblocks());
+        for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
+        for_blocks(all, 4, [&](std::size_t, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* P = s.at(0);
+            float* N[3] = {s.at(1), s.at(2), s.at(3)};
+            gather_phi(n, phi_, P);
+            gather_n(n, src, N[0], N[1], N[2]);
+            const float* Nc[3] = {N[0], N[1], N[2]};
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            for (int a = 0; a < 3; ++a) {
+                const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
+                for (int z = 0; z < kBlockDim; ++z)
+                    for (int y = 0; y < kBlockDim; ++y)
+                        for (int x = 0; x < kBlockDim; ++x) {
+                            float m[3], k2;
+                            face_terms(P, Nc, lidx(x, y, z), sa, sb, sc, m, k2);
+                            gface_[a][base + std::size_t(bidx(x, y, z))] = std::exp(-k2 * inv2mu2);
+                        }
+            }
+        });
+    }
+
+    void copy_fields(std::vector<float> (&src)[3], std::vector<float> (&dst)[3]) {
+        for (int c = 0; c < 3; ++c) dst[c] = src[c];
+    }
+
+    void normal_loop() {
+        init_normals();
+        const bool highboost = opt_.mode == SmoothMode::HighBoost;
+        Conductance cond = Conductance::One;
+        if (opt_.mode == SmoothMode::Anisotropic) {
+            if (opt_.conductance_presmooth_steps > 0) {
+                cond = Conductance::Frozen;
+                for (int c = 0; c < 3; ++c) std::fill(gface_[c].begin(), gface_[c].end(), 1.0f);
+                copy_fields(n_, aux_);
+                copy_fields(n_, n2_);
+                for (int s = 0; s < opt_.conductance_presmooth_steps; ++s) {
+                    normal_step(aux_, n2_, Conductance::One, true);
+                    std::swap(aux_, n2_);
+                }
+                conductance_from(aux_);
+            } else {
+                cond = Conductance::Live;
+            }
+        }
+        if (highboost) copy_fields(n_, aux_);
+        copy_fields(n_, n2_);
+        std::vector<double> gs;
+        for (int s = 0; s < opt_.normal_steps; ++s) {
+            gs.push_back(normal_step(n_, n2_, cond, true));
+            std::swap(n_, n2_);
+            tick(0.5 * double(s + 1) / opt_.normal_steps);
+        }
+        gs.push_back(normal_step(n_, n2_, cond, false));
+        rep_.normal_energy_start.push_back(gs.front());
+        rep_.normal_energy.push_back(gs.back());
+        rep_.normal_energy_steps.push_back(std::move(gs));
+        if (highboost) {
+            const float a = opt_.alpha;
+            for (std::size_t i = 0; i < n_[0].size(); ++i) {
+                if (!mask_[i]) continue;
+                float v[3];
+                for (int c = 0; c < 3; ++c) v[c] = (1.0f + a) * aux_[c][i] - a * n_[c][i];
+                const float len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+                if (len > 1e-6f)
+                    for (int c = 0; c < 3; ++c) n_[c][i] = v[c] / len;
+                else
+                    for (int c = 0; c < 3; ++c) n_[c][i] = aux_[c][i];
+            }
+        }
+    }
+
+    // ---------------------------------------------------------------- refit
+    /// H_N = ∇·N (central differences, Eq. 53) [− T ∇·(G N), Eq. 39] over the active blocks.
+    void target_curvature() {
+        const bool second = opt_.second_order_term;
+        const float inv2mu2 = inv2mu2_;
+        const SmoothMode emode = opt_.mode == SmoothMode::Anisotropic ? SmoothMode::Anisotropic : SmoothMode::Isotropic;
+        if (second) {
+            // G per sample from the central-difference shape matrix of N, into phi2_
+            std::vector<std::int32_t> all(nblocks());
+            for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
+            for_blocks(all, 3, [&](std::size_t, std::int32_t b, Scratch& s) {
+                Neighbourhood n;
+                neighbourhood(std::size_t(b), n);
+                float* N[3] = {s.at(0), s.at(1), s.at(2)};
+                gather_n(n, n_, N[0], N[1], N[2]);
+                const std::size_t base = std::size_t(b) * kBlockVoxels;
+                for (int z = 0; z < kBlockDim; ++z)
+                    for (int y = 0; y < kBlockDim; ++y)
+                        for (int x = 0; x < kBlockDim; ++x) {
+                            const int q = lidx(x, y, z);
+                            float dn2 = 0.0f, v2 = 0.0f;
+                            for (int c = 0; c < 3; ++c) {
+                                float vc = 0.0f;
+                                for (int j = 0; j < 3; ++j) {
+                                    const float d = 0.5f * (N[c][q + kStride[j]] - N[c][q - kStride[j]]);
+                                    dn2 += d * d;
+                                    vc += d * N[j][q];
+                                }
+                                v2 += vc * vc;
+                            }
+                            phi2_[base + std::size_t(bidx(x, y, z))] =
+                                penalty(emode, std::max(dn2 - v2, 0.0f), inv2mu2);
+                        }
+            });
+        }
+        const float T = float(opt_.normal_steps) * std::min(opt_.normal_dt, kMaxDt);
+        for_blocks(active_, second ? 4 : 3, [&](std::size_t, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* N[3] = {s.at(0), s.at(1), s.at(2)};
+            gather_n(n, n_, N[0], N[1], N[2]);
+            float* Gv = nullptr;
+            if (second) {
+                Gv = s.at(3);
+                gather(n, phi2_.data(), 0.0f, 0.0f, Gv);
+            }
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const int q = lidx(x, y, z);
+                        float h = 0.0f;
+                        for (int a = 0; a < 3; ++a) h += 0.5f * (N[a][q + kStride[a]] - N[a][q - kStride[a]]);
+                        if (second) {
+                            float t = 0.0f;
+                            for (int a = 0; a < 3; ++a)
+                                t += 0.5f * (Gv[q + kStride[a]] * N[a][q + kStride[a]] -
+                                             Gv[q - kStride[a]] * N[a][q - kStride[a]]);
+                            h -= T * t;
+                        }
+                        hn_[base + std::size_t(bidx(x, y, z))] = h;
+                    }
+        });
+    }
+
+    /// One explicit step φ ← φ + dt |∇φ|_upwind (H_φ − hn) on the active samples (phi_ → phi2_,
+    /// then swapped). Returns D(φ before the step) when with_energy.
+    double refit_step(bool with_energy) {
+        std::vector<double> energy(active_.size(), 0.0);
+        std::atomic<bool> bad{false};
+        const float dt = std::min(opt_.refit_dt, kMaxDt);
+        for_blocks(active_, 1, [&](std::size_t k, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* P = s.at(0);
+            gather_phi(n, phi_, P);
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            double e = 0.0;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        const int q = lidx(x, y, z);
+                        const float p = P[q];
+                        if (!mask_[i]) {
+                            phi2_[i] = p;
+                            continue;
+                        }
+                        // H_φ with the smallest support (Eq. 54): staggered magnitudes on the 2×3 stencil
+                        float H = 0.0f;
+                        float gp2 = 0.0f, gm2 = 0.0f;  // upwind gradient, F > 0 / F < 0
+                        float gc[3];
+                        for (int a = 0; a < 3; ++a) {
+                            const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
+                            const float dp = P[q + sa] - p;
+                            const float dm = p - P[q - sa];
+                            const float bp = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q + sa + sb] - P[q + sa - sb]));
+                            const float cp = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q + sa + sc] - P[q + sa - sc]));
+                            const float bm = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q - sa + sb] - P[q - sa - sb]));
+                            const float cm = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q - sa + sc] - P[q - sa - sc]));
+                            const float np = std::sqrt(dp * dp + bp * bp + cp * cp);
+                            const float nm = std::sqrt(dm * dm + bm * bm + cm * cm);
+                            H += dp / std::max(np, 1e-6f) - dm / std::max(nm, 1e-6f);
+                            const float dmp = std::max(dm, 0.0f), dmn = std::min(dm, 0.0f);
+                            const float dpp = std::max(dp, 0.0f), dpn = std::min(dp, 0.0f);
+                            gp2 += dmp * dmp + dpn * dpn;
+                            gm2 += dmn * dmn + dpp * dpp;
+                            gc[a] = 0.5f * (dp + dm);
+                        }
+                        const float rhs = H - hn_[i];  // φ_t = |∇φ| rhs, speed F = −rhs
+                        const float grad = std::sqrt(rhs < 0.0f ? gp2 : gm2);
+                        const float v = p + dt * grad * rhs;
+                        if (!std::isfinite(v)) bad = true;
+                        phi2_[i] = v;
+                        if (with_energy) {
+                            const float gn = std::sqrt(gc[0] * gc[0] + gc[1] * gc[1] + gc[2] * gc[2]);
+                            e += double(gn) - double(gc[0] * n_[0][i] + gc[1] * n_[1][i] + gc[2] * n_[2][i]);
+                        }
+                    }
+            energy[k] = e;
+        });
+        if (bad) fail("phi in the refit");
+        std::swap(phi_, phi2_);
+        double sum = 0.0;
+        for (const double e : energy) sum += e;
+        return sum;
+    }
+
+    /// D of the current φ (no update).
+    double refit_energy() {
+        std::vector<double> energy(active_.size(), 0.0);
+        for_blocks(active_, 1, [&](std::size_t k, std::int32_t b, Scratch& s) {
+            Neighbourhood n;
+            neighbourhood(std::size_t(b), n);
+            float* P = s.at(0);
+            gather_phi(n, phi_, P);
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            double e = 0.0;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        if (!mask_[i]) continue;
+                        const int q = lidx(x, y, z);
+                        const float gx = 0.5f * (P[q + 1] - P[q - 1]);
+                        const float gy = 0.5f * (P[q + L] - P[q - L]);
+                        const float gz = 0.5f * (P[q + L2] - P[q - L2]);
+                        e += double(std::sqrt(gx * gx + gy * gy + gz * gz)) -
+                             double(gx * n_[0][i] + gy * n_[1][i] + gz * n_[2][i]);
+                    }
+            energy[k] = e;
+        });
+        double sum = 0.0;
+        for (const double e : energy) sum += e;
+        return sum;
+    }
+
+    void refit_loop() {
+        target_curvature();
+        std::vector<double> ds;
+        int steps = 0;
+        double prev = 0.0;
+        for (int s = 0; s < opt_.refit_max_steps; ++s) {
+            const double d = refit_step(true);  // D of φ before this step
+            ds.push_back(d);
+            ++steps;
+            tick(0.5 + 0.5 * double(s + 1) / opt_.refit_max_steps);
+            if (s > 0 && !(d < prev * (1.0 - opt_.refit_tolerance))) break;
+            prev = d;
+        }
+        const double d_end = refit_energy();
+        ds.push_back(d_end);
+        rep_.refit_energy_start.push_back(ds.front());
+        rep_.refit_energy.push_back(d_end);
+        rep_.refit_energy_steps.push_back(std::move(ds));
+        rep_.refit_steps.push_back(steps);
+    }
+
+    Grid grid_;
+    SmoothOptions opt_;
+    SmoothReport& rep_;
+    Progress* progress_;
+    float inv2mu2_ = 50.0f;
+    int iteration_ = 0;
+
+    std::array<int, 3> block_dims_{};
+    std::vector<std::int32_t> table_;
+    std::vector<std::array<int, 3>> coords_;
+    std::vector<float> phi_, phi2_, hn_;
+    std::vector<float> n_[3], n2_[3], aux_[3], gface_[3];
+    std::vector<std::uint8_t> mask_;
+    std::vector<std::int32_t> active_;
+    std::size_t active_voxels_ = 0;
+};
+
+void validate(const Volume& v, const SmoothOptions& opt) {
+    auto bad = [](const std::string& m) { throw InvalidInput("smooth_volume: " + m); };
+    if (opt.iterations < 1) bad("iterations must be >= 1, got " + std::to_string(opt.iterations));
+    if (opt.normal_steps < 1) bad("normal_steps must be >= 1, got " + std::to_string(opt.normal_steps));
+    if (!(opt.mu > 0.0f) || !std::isfinite(opt.mu)) bad("mu must be > 0, got " + std::to_string(opt.mu));
+    if (!(opt.alpha >= 0.0f) || !std::isfinite(opt.alpha)) bad("alpha must be >= 0, got " + std::to_string(opt.alpha));
+    if (!(opt.normal_dt > 0.0f) || !std::isfinite(opt.normal_dt))
+        bad("normal_dt must be > 0, got " + std::to_string(opt.normal_dt));
+    if (!(opt.refit_dt > 0.0f) || !std::isfinite(opt.refit_dt))
+        bad("refit_dt must be > 0, got " + std::to_string(opt.refit_dt));
+    if (opt.refit_max_steps < 1) bad("refit_max_steps must be >= 1, got " + std::to_string(opt.refit_max_steps));
+    if (!(opt.refit_tolerance >= 0.0)) bad("refit_tolerance must be >= 0");
+    if (opt.conductance_presmooth_steps < 0) bad("conductance_presmooth_steps must be >= 0");
+    if (!(opt.active_band >= 1.5f && opt.active_band <= 5.0f))
+        bad("active_band must be in [1.5, 5] voxels, got " + std::to_string(opt.active_band));
+    if (opt.threads < 0) bad("threads must be >= 0, got " + std::to_string(opt.threads));
+    if (!(v.grid.voxel_size > 0.0) || !std::isfinite(v.grid.voxel_size)) bad("volume voxel_size must be > 0");
+    for (int a = 0; a < 3; ++a) {
+        if (v.grid.dims[a] < 1) bad("volume dims must be >= 1");
+        if (v.block_dims[a] != (v.grid.dims[a] + kBlockDim - 1) / kBlockDim) bad("volume block_dims do not match dims");
+    }
+    if (v.block_table.size() != std::size_t(v.block_dims[0]) * v.block_dims[1] * v.block_dims[2])
+        bad("volume block_table has " + std::to_string(v.block_table.size()) + " entries, expected " +
+            std::to_string(std::size_t(v.block_dims[0]) * v.block_dims[1] * v.block_dims[2]));
+    if (v.values.size() != v.block_coords.size() * kBlockVoxels)
+        bad("volume values has " + std::to_string(v.values.size()) + " samples, expected 512 per block");
+    for (std::size_t b = 0; b < v.block_coords.size(); ++b) {
+        const auto& c = v.block_coords[b];
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= v.block_dims[0] || c[1] >= v.block_dims[1] ||
+            c[2] >= v.block_dims[2] || v.block_table[v.table_index(c[0], c[1], c[2])] != std::int32_t(b))
+            bad("volume block " + std::to_string(b) + " does not match its block_table entry");
+    }
+    for (const float x : v.values)
+        if (!std::isfinite(x)) throw NumericalError("smooth_volume: the input volume holds a NaN/Inf sample");
+}
+
+}  // namespace
+}  // namespace detail
+
+SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt, Progress* progress) {
+    detail::validate(v, opt);
+    SmoothReport rep;
+    if (opt.normal_dt > detail::kMaxDt)
+        rep.warnings.push_back("normal_dt " + std::to_string(opt.normal_dt) + " clamped to the stability bound 1/6");
+    if (opt.refit_dt > detail::kMaxDt)
+        rep.warnings.push_back("refit_dt " + std::to_string(opt.refit_dt) + " clamped to the stability bound 1/6");
+    detail::begin(progress, "smooth");
+    auto work = [&] {
+        detail::LevelSetEngine engine(v, opt, rep, progress);
+        if (!engine.has_surface()) {
+            rep.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");
+            return;
+        }
+        engine.run();
+        engine.write_back(v);
+    };
+    if (opt.threads > 0) {
+        tbb::task_arena arena(opt.threads);
+        arena.execute(work);
+    } else {
+        work();
+    }
+    return rep;
+}
+
+}  // namespace normalflow

@@ -1,0 +1,109 @@
+#pragma once
+/// \file smooth.h
+/// The level-set normal-map engine of normalflow: geometric surface processing of a signed
+/// distance volume through its normal map (Tasdizen, Whitaker, Burchard & Osher, "Geometric
+/// Surface Processing via Normal Maps", ACM TOG 22(4), 2003), plus mean curvature flow as the
+/// second-order baseline.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/progress.h"
+#include "core/volume.h"
+
+namespace normalflow {
+
+/// Which surface process smooth_volume runs.
+enum class SmoothMode {
+    Isotropic,      ///< isotropic normal diffusion, G(κ²) = κ² (Tasdizen et al. 2003, Eq. 15)
+    Anisotropic,    ///< Perona–Malik on the normals, g(κ²) = exp(−κ²/(2µ²)) (Eq. 20)
+    HighBoost,      ///< high-boost filter, N' = normalize((1+α)Nⁿ − αNⁿ⁺¹) (Eq. 21–22)
+    MeanCurvature,  ///< mean curvature flow φ_t = |∇φ| H, H = κ1 + κ2 (Eq. 9)
+};
+
+/// Name of a mode as the command line spells it: "isotropic", "anisotropic", "highboost", "mcf".
+const char* to_string(SmoothMode mode);
+
+/// Options of smooth_volume. Lengths and times are in voxel units (h = 1) unless stated.
+struct SmoothOptions {
+    SmoothMode mode = SmoothMode::Anisotropic;
+    int iterations = 5;          ///< main iterations (normal loop + refit), >= 1
+    int normal_steps = 25;       ///< steps of the normal loop per main iteration, >= 1 (paper: 25).
+                                 ///< MeanCurvature: explicit curvature steps per main iteration.
+    float mu = 0.1f;             ///< 1/voxel, > 0: anisotropic conductance scale (paper: 0.1)
+    float alpha = 1.0f;          ///< >= 0: high-boost gain (Eq. 22)
+    float normal_dt = 0.1f;      ///< voxel², time step of the normal loop, > 0; values above the
+                                 ///< stability bound 1/6 of the 3-D staggered operator are clamped
+                                 ///< to 1/6 (with a warning)
+    float refit_dt = 0.1f;       ///< voxel², time step of the refit and of mean curvature flow, > 0;
+                                 ///< clamped to 1/6 (explicit second-order flow) with a warning
+    int refit_max_steps = 40;    ///< >= 1: refit steps per main iteration at most
+    double refit_tolerance = 1e-4;  ///< >= 0: the refit stops when D decreases by less than this
+                                    ///< fraction of itself in one step (0: until D stops decreasing)
+    int conductance_presmooth_steps = 8;  ///< >= 0, Anisotropic only: κ² for the conductance g is
+        ///< taken from the normals pre-smoothed by this many isotropic steps of normal_dt (Catté,
+        ///< Lions, Morel & Coll 1992: a regularised Perona–Malik; 8 steps of 0.1 ≈ Gaussian σ ≈ 1.3
+        ///< voxel). The conductance is then computed once per main iteration and held during its
+        ///< normal loop. 0: the paper's g from the current normals at every step (noise whose
+        ///< curvature exceeds µ then stops the flow and survives).
+    bool second_order_term = false;  ///< add Appendix A's second term (Eq. 39), ∇·(G N), scaled by
+                                     ///< the normal-loop time normal_steps·normal_dt, to the refit
+    float active_band = 4.0f;    ///< voxels, in [1.5, 5]: the normal loop and the refit update the
+                                 ///< samples with |φ| <= this at the start of a main iteration
+    int threads = 0;             ///< worker threads, >= 0 (0: all, 1: serial); results do not depend on it
+};
+
+/// What smooth_volume did.
+struct SmoothReport {
+    int iterations = 0;                       ///< main iterations run
+    std::vector<double> normal_energy_start;  ///< G at the start of each normal loop (voxel units)
+    std::vector<double> normal_energy;        ///< G at the end of each normal loop
+    std::vector<std::vector<double>> normal_energy_steps;  ///< per main iteration: G before each step and after the last
+    std::vector<double> refit_energy_start;   ///< D at the start of each refit (voxel units, Σ over the active band)
+    std::vector<double> refit_energy;         ///< D at the end of each refit
+    std::vector<std::vector<double>> refit_energy_steps;   ///< per main iteration: D before each refit step
+    std::vector<int> refit_steps;             ///< refit steps taken per main iteration
+    std::vector<std::size_t> band_voxels;     ///< samples processed (active band) per main iteration
+    std::vector<std::size_t> allocated_voxels;  ///< samples held in allocated blocks per main iteration
+    std::vector<double> seconds_per_iteration;  ///< wall seconds of each main iteration
+    double seconds_normals = 0;  ///< total wall seconds in the normal loop (incl. normals, pre-smoothing)
+    double seconds_refit = 0;    ///< total wall seconds in the refit (incl. H_N) or the curvature flow
+    double seconds_reinit = 0;   ///< total wall seconds moving the band and reinitialising φ
+    std::vector<std::string> warnings;
+};
+
+/// Smooths the surface {φ = 0} of a signed distance volume by the method of Tasdizen et al. 2003.
+///
+/// Method: each main iteration (1) computes the normal map N = ∇φ/|∇φ| (central differences,
+/// Eq. 41–42); (2) runs normal_steps steps of the normal loop ∂N/∂t = (I − NNᵀ)∇·[g ∇N(I − P)]
+/// with Appendix B's staggered fluxes on the 2×3 stencil (Eq. 43–52) and renormalisation;
+/// (3) refits φ to the normals, ∂φ/∂t = |∇φ|(H_φ − H_N) (Eq. 17, 53–54, upwind |∇φ| of Osher &
+/// Sethian 1988) until D = Σ(|∇φ| − ∇φ·N) stops decreasing; (4) moves the narrow band with the
+/// surface (allocating and freeing 8³ blocks) and reinitialises φ to a signed distance (interface
+/// samples by φ/|∇φ| bounded by the axis crossings, the rest by Jacobi sweeps of the Godunov
+/// eikonal update). MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3).
+/// Anisotropic mode regularises the conductance (see SmoothOptions::conductance_presmooth_steps).
+///
+/// \param v        volume, modified in place: world-unit φ, negative inside. On return its band is
+///                 8 voxels wide (half_width = 8, background = 8 h), its allocated blocks are the
+///                 blocks that hold the surface and their 26 neighbours, tiles carry the right sign.
+/// \param opt      options (voxel units, see SmoothOptions).
+/// \param progress optional; ticked once per normal/refit step; may cancel.
+///
+/// Accepted input: any Volume whose allocated blocks hold the surface (a band of >= 1 voxel each
+/// side) and whose unallocated blocks are tiled with the right sign. Open or many-component
+/// surfaces are fine (they are level sets). The band should not touch the grid border (the
+/// stencils clamp to the border, a zero-flux condition). A volume without a surface is returned
+/// unchanged with a warning.
+///
+/// \throw InvalidInput   bad options or an inconsistent volume (messages name the field).
+/// \throw NumericalError a NaN/Inf appeared in φ or N.
+/// \throw Cancelled      progress->should_stop() returned true.
+///
+/// Cost: O(band voxels) memory (about 17 floats per allocated sample) and time per step;
+/// threads via TBB over blocks, each step writes a second buffer and reductions are summed in a
+/// fixed order, so the result is bit-identical for any thread count.
+SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt = {}, Progress* progress = nullptr);
+
+}  // namespace normalflow

@@ -1,0 +1,104 @@
+#include "sdf/triangle_bvh.h"
+
+#include <algorithm>
+#include <string>
+
+#include <tbb/task_group.h>
+
+#include "core/errors.h"
+
+namespace normalflow::detail {
+namespace {
+
+struct Builder {
+    std::vector<BvhNode>& nodes;
+    std::vector<std::uint32_t>& order;
+    const std::vector<Vec3d>& lo;
+    const std::vector<Vec3d>& hi;
+    const std::vector<Vec3d>& centroid;
+    std::size_t leaf;
+
+    // Number of nodes a subtree over n triangles uses (splits are always at n / 2).
+    std::size_t count_nodes(std::size_t n) const {
+        return n <= leaf ? 1 : 1 + count_nodes(n / 2) + count_nodes(n - n / 2);
+    }
+
+    void build(std::size_t node, std::size_t begin, std::size_t end) {
+        BvhNode& nd = nodes[node];
+        Vec3d blo{1e300, 1e300, 1e300}, bhi{-1e300, -1e300, -1e300};
+        Vec3d clo = blo, chi = bhi;
+        for (std::size_t i = begin; i < end; ++i) {
+            const std::uint32_t t = order[i];
+            blo = cwise_min(blo, lo[t]);
+            bhi = cwise_max(bhi, hi[t]);
+            clo = cwise_min(clo, centroid[t]);
+            chi = cwise_max(chi, centroid[t]);
+        }
+        nd.lo = blo;
+        nd.hi = bhi;
+        const std::size_t n = end - begin;
+        if (n <= leaf) {
+            nd.first = std::uint32_t(begin);
+            nd.count = std::uint32_t(n);
+            return;
+        }
+        const Vec3d ext = chi - clo;
+        const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+        const std::size_t mid = begin + n / 2;
+        std::nth_element(order.begin() + std::ptrdiff_t(begin), order.begin() + std::ptrdiff_t(mid),
+                         order.begin() + std::ptrdiff_t(end), [&](std::uint32_t a, std::uint32_t b) {
+                             const double ca = centroid[a][axis], cb = centroid[b][axis];
+                             return ca < cb || (ca == cb && a < b);
+                         });
+        const std::size_t left = node + 1;
+        const std::size_t right = left + count_nodes(n / 2);
+        nd.count = 0;
+        nd.first = std::uint32_t(right);
+        if (n > 20000) {
+            tbb::task_group g;
+            g.run([&] { build(left, begin, mid); });
+            build(right, mid, end);
+            g.wait();
+        } else {
+            build(left, begin, mid);
+            build(right, mid, end);
+        }
+    }
+};
+
+}  // namespace
+
+void TriangleBvh::build(const Mesh& m, int leaf_size) {
+    const std::size_t nf = m.triangles.size();
+    std::vector<Vec3d> lo(nf), hi(nf), centroid(nf);
+    for (std::size_t f = 0; f < nf; ++f) {
+        const Tri& t = m.triangles[f];
+        const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
+        lo[f] = cwise_min(a, cwise_min(b, c));
+        hi[f] = cwise_max(a, cwise_max(b, c));
+        centroid[f] = (a + b + c) / 3.0;
+    }
+    order.resize(nf);
+    for (std::size_t f = 0; f < nf; ++f) order[f] = std::uint32_t(f);
+    nodes.clear();
+    if (nf == 0) return;
+    Builder b{nodes, order, lo, hi, centroid, std::size_t(std::max(1, leaf_size))};
+    nodes.resize(b.count_nodes(nf));
+    b.build(0, 0, nf);
+}
+
+void validate_mesh(const Mesh& m, const char* who) {
+    const std::size_t nv = m.positions.size();
+    for (std::size_t f = 0; f < m.triangles.size(); ++f)
+        for (int c = 0; c < 3; ++c) {
+            const std::uint32_t v = m.triangles[f][c];
+            if (v >= nv)
+                throw InvalidInput(std::string(who) + ": triangle " + std::to_string(f) + " has vertex index " +
+                                   std::to_string(v) + ", expected < " + std::to_string(nv));
+            if (!is_finite(m.positions[v]))
+                throw InvalidInput(std::string(who) + ": vertex " + std::to_string(v) +
+                                   " has a non-finite coordinate");
+        }
+}
+
+}  // namespace normalflow::detail
