@@ -44,6 +44,16 @@ bool interrupted();
 /// Peak resident memory of this process, bytes.
 std::size_t peak_memory_bytes();
 
+/// Memory the system can give this process now (MemAvailable of /proc/meminfo), bytes; 0 if unknown.
+std::size_t available_memory_bytes();
+
+/// "4G", "512M", "1.5g", "100000": a byte count (K, M, G, T are powers of 1024).
+/// \throw InvalidInput naming the option for anything else.
+std::size_t parse_bytes(const std::string& text, const char* option);
+
+/// "1.23 GB"-style rendering of a byte count.
+std::string format_bytes(double bytes);
+
 /// Wall-clock stopwatch in seconds.
 class Stopwatch {
 public:

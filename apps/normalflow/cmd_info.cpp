@@ -1,4 +1,6 @@
-// normalflow info IN [--self-intersections] [--json]: what a mesh file holds, and its defects.
+// normalflow info IN [--self-intersections] [--repair] [--json]: what a mesh file holds, and its defects.
+// With --repair the mesh is repaired with CGAL's polygon-soup tools (repair_mesh) and the report is of
+// the repaired mesh, next to what the repair did.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -17,13 +19,24 @@ namespace {
 struct InfoArgs {
     std::string input;
     bool self_intersections = false;  ///< also count intersecting triangle pairs (CGAL; slower)
+    bool repair = false;              ///< repair first (merge points, drop degenerate/duplicate faces, orient)
     OutputFlags out;
 };
 
 int run_info(const InfoArgs& a) {
     Stopwatch clock;
     ReadInfo info;
-    const Mesh mesh = read_mesh(a.input, &info);
+    Mesh mesh = read_mesh(a.input, &info);
+    bool repaired = false;
+#ifdef NORMALFLOW_HAS_CGAL
+    RepairReport rep;
+    if (a.repair) {
+        rep = repair_mesh(mesh);
+        repaired = true;
+    }
+#else
+    if (a.repair) throw InvalidInput("info: --repair needs a build with CGAL");
+#endif
     const MeshReport r = mesh_report(mesh);
     long long self_intersections = -1;
 #ifdef NORMALFLOW_HAS_CGAL
@@ -46,6 +59,17 @@ int run_info(const InfoArgs& a) {
         for (double c : {r.bbox.min.x, r.bbox.min.y, r.bbox.min.z, r.bbox.max.x, r.bbox.max.y, r.bbox.max.z}) box.push(c);
         j.set("bbox", box);
         if (self_intersections >= 0) j.set("self_intersecting_pairs", self_intersections);
+#ifdef NORMALFLOW_HAS_CGAL
+        if (repaired) {
+            Json rj = Json::object();
+            rj.set("points_merged", rep.points_merged).set("degenerate_removed", rep.degenerate_removed);
+            rj.set("duplicates_removed", rep.duplicates_removed).set("faces_reversed", rep.faces_reversed);
+            rj.set("orientable", rep.orientable).set("patches_inverted", rep.patches_inverted);
+            rj.set("open_patches", rep.open_patches).set("warnings", Json::array(rep.warnings));
+            j.set("repair", rj);
+        }
+#endif
+        j.set("repaired", repaired);
         Json w = Json::array(info.warnings);
         for (const auto& s : r.warnings) w.push(s);
         j.set("warnings", w).set("seconds", clock.seconds());
@@ -56,6 +80,17 @@ int run_info(const InfoArgs& a) {
     std::printf("%s (%s)\n", a.input.c_str(), info.format.c_str());
     std::printf("  in file          %zu points, %zu faces%s\n", info.file_vertices, info.file_faces,
                 info.polygons_split ? " (polygons split into triangles)" : "");
+#ifdef NORMALFLOW_HAS_CGAL
+    if (repaired) {
+        std::printf("  repair           %zu points merged, %zu degenerate and %zu duplicate faces removed,\n",
+                    rep.points_merged, rep.degenerate_removed, rep.duplicates_removed);
+        std::printf("                   %zu faces reversed, %zu closed patches turned outward, %zu open patches%s\n",
+                    rep.faces_reversed, rep.patches_inverted, rep.open_patches,
+                    rep.orientable ? "" : " (not orientable without splitting)");
+        for (const auto& s : rep.warnings) std::printf("  repair warning: %s\n", s.c_str());
+        std::printf("  after repair:\n");
+    }
+#endif
     std::printf("  vertices         %zu unique positions\n", r.vertices);
     std::printf("  triangles        %zu\n", r.faces);
     std::printf("  components       %zu\n", r.components);
@@ -83,6 +118,9 @@ void add_info_command(CLI::App& app) {
     cmd->add_option("IN", args->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
     cmd->add_flag("--self-intersections", args->self_intersections,
                   "also count intersecting triangle pairs (slower)");
+    cmd->add_flag("--repair", args->repair,
+                  "repair first (merge duplicate points, remove degenerate and duplicate faces, orient) and "
+                  "report the repaired mesh");
     add_output_flags(cmd, args->out);
     on_run(cmd, args, run_info);
 }

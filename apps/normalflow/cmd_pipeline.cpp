@@ -10,6 +10,7 @@
 #include "extract/extract_surface.h"
 #include "io/io.h"
 #include "normals/smooth.h"
+#include "sdf/memory_estimate.h"
 #include "sdf/scan_convert.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/aabb_distance.h"
@@ -28,6 +29,8 @@ struct GridArgs {
     double shell = 0;          ///< world units: process an open sheet as a shell of this thickness
     bool repair = true;        ///< merge points, drop degenerate faces, orient, before scan conversion
     int threads = 0;           ///< 0 = all cores
+    std::string max_memory;    ///< refuse runs estimated above this ("4G"); default: what the system has
+    bool smoothing = false;    ///< the engine runs after scan conversion (for the memory estimate)
 };
 
 struct VoxelizeArgs {
@@ -45,10 +48,11 @@ struct SmoothArgs {
     std::string input, output;
     GridArgs grid;
     std::string mode = "anisotropic";  ///< isotropic | anisotropic | highboost | mcf
-    int iterations = 5;                ///< main iterations
-    int normal_steps = 25;             ///< normal-loop steps per main iteration
-    float mu = 0.1f;                   ///< 1/voxel, anisotropic conductance scale
-    float alpha = 1.0f;                ///< high-boost amount
+    // Defaults are the library's (SmoothOptions), tuned on the real noisy pairs.
+    int iterations = SmoothOptions{}.iterations;      ///< main iterations
+    int normal_steps = SmoothOptions{}.normal_steps;  ///< normal-loop steps per main iteration
+    float mu = SmoothOptions{}.mu;                    ///< 1/voxel, anisotropic conductance scale
+    float alpha = SmoothOptions{}.alpha;              ///< high-boost amount
     int presmooth = -1;                ///< conductance pre-smoothing steps (-1: library default)
     bool second_order = false;         ///< Appendix A's second term in the refit
     OutputFlags out;
@@ -62,8 +66,32 @@ void add_grid_options(CLI::App* cmd, GridArgs& g) {
     cmd->add_option("--shell", g.shell, "process an open sheet as a shell of this thickness (world units)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_flag("!--no-repair", g.repair, "do not merge points, drop degenerate faces and orient first");
+    cmd->add_option("--max-memory", g.max_memory,
+                    "refuse a run estimated to need more than this (e.g. 4G; default: the memory available)");
     cmd->add_option("--threads", g.threads, "worker threads (0: all cores); results do not depend on it")
         ->check(CLI::NonNegativeNumber);
+}
+
+/// Refuses, before anything big is allocated, a run whose estimated peak exceeds --max-memory or
+/// what the system has available.
+void check_memory(const Mesh& mesh, const GridArgs& g, const std::string& input) {
+    if (mesh.triangles.empty()) return;  // scan_convert gives the clear message
+    const Box3d box = bounding_box(mesh);
+    const Vec3d size = box.max - box.min;
+    const double longest = std::max({size.x, size.y, size.z});
+    const double h = g.voxel_size > 0 ? g.voxel_size : longest / g.resolution;
+    if (!(h > 0) || !std::isfinite(h)) return;
+    const MemoryEstimate e = estimate_memory(mesh, h, g.smoothing ? 8.0f : g.band);
+    const double need = e.total(g.smoothing);
+    const std::size_t available = available_memory_bytes();
+    const std::size_t limit = g.max_memory.empty() ? available : parse_bytes(g.max_memory, "--max-memory");
+    if (limit > 0 && need > double(limit))
+        throw OutOfMemory(input + ": this run needs about " + format_bytes(need) + " at voxel size " +
+                          std::to_string(h) + ", more than the " + format_bytes(double(limit)) +
+                          (g.max_memory.empty() ? " available" : " allowed by --max-memory") +
+                          "; lower --resolution or raise --max-memory");
+    if (e.grid_samples / 512 > 2.0e9)
+        throw OutOfMemory(input + ": the grid would have more than 2^31 blocks; lower --resolution");
 }
 
 /// Reads, repairs and scan-converts `input`; fills the "input" and "voxelize" parts of j.
@@ -86,6 +114,7 @@ Volume mesh_to_volume(const std::string& input, const GridArgs& g, TerminalProgr
     }
 #endif
     const double t_repair = clock.lap();
+    check_memory(mesh, g, input);
     progress.begin("voxelize");
     ScanConvertOptions opt;
     opt.resolution = g.resolution;
@@ -118,13 +147,19 @@ Volume mesh_to_volume(const std::string& input, const GridArgs& g, TerminalProgr
     return v;
 }
 
-Mesh volume_to_mesh(const Volume& v, TerminalProgress& progress, Json& j) {
+/// `source` names the input in messages; `smoothed` says whether the engine ran before.
+Mesh volume_to_mesh(const Volume& v, TerminalProgress& progress, Json& j, const std::string& source, bool smoothed) {
     Stopwatch clock;
     progress.begin("extract");
     ExtractReport er;
     Mesh m = extract_surface(v, {}, &er);
     j["seconds"].set("extract", clock.seconds());
-    if (m.empty()) throw InvalidInput("extract: the volume holds no surface (every sample has the same sign)");
+    if (m.empty()) {
+        if (smoothed)
+            throw InvalidInput(source + ": the surface vanished during smoothing (parts thinner than a few voxels "
+                               "shrink away); raise --resolution or lower --iterations");
+        throw InvalidInput(source + ": the volume holds no surface (every sample has the same sign)");
+    }
     return m;
 }
 
@@ -176,7 +211,7 @@ int run_extract(const ExtractArgs& a) {
     Stopwatch clock;
     const Volume v = read_volume(a.input);
     j["seconds"].set("read", clock.seconds());
-    const Mesh m = volume_to_mesh(v, progress, j);
+    const Mesh m = volume_to_mesh(v, progress, j, a.input, false);
     write_result(a.output, m, progress, j);
     finish(j, a.out, total, progress);
     progress.note("extract: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles)");
@@ -206,6 +241,7 @@ int run_smooth(const SmoothArgs& a) {
     Json j = Json::object();
     j.set("command", "smooth").set("mode", a.mode);
     GridArgs g = a.grid;
+    g.smoothing = true;
     g.band = std::max(g.band, 3.0f);  // the engine rebuilds an 8-voxel band itself
     Volume v = mesh_to_volume(a.input, g, progress, j);
     Stopwatch clock;
@@ -217,7 +253,7 @@ int run_smooth(const SmoothArgs& a) {
         .set("refit_energy", Json::array(sr.refit_energy));
     j.set("smooth", s);
     for (const auto& w : sr.warnings) j["warnings"].push(w);
-    const Mesh m = volume_to_mesh(v, progress, j);
+    const Mesh m = volume_to_mesh(v, progress, j, a.input, true);
     write_result(a.output, m, progress, j);
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles, " +

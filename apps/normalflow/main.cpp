@@ -15,9 +15,18 @@ int main(int argc, char** argv) {
     app.require_subcommand(1);
     // One line per subcommand (declared in commands.h).
     add_info_command(app);
+    add_taubin_command(app);
+    add_laplacian_command(app);
+    add_bilateral_command(app);
+    add_noise_command(app);
+    add_compare_command(app);
     add_voxelize_command(app);
     add_extract_command(app);
     add_smooth_command(app);
+    add_convert_command(app);
+    add_compress_command(app);
+    add_cleanup_command(app);
+    add_tetmesh_command(app);
 
     install_interrupt_handler();
     try {

@@ -79,8 +79,13 @@ Mesh read_off_memory(std::string_view bytes, const std::string& name, ReadInfo* 
     if (!L.next()) fail(kReader, name, "no header (only comments and blank lines)");
 
     // Header keyword: [ST][C][N][4][n]OFF, optional when the file starts with the counts.
+    // The first token is the keyword unless it is a number (e.g. "4OFF" is a keyword, "3" a count).
     const char* q = L.b;
-    if (!(*q >= '0' && *q <= '9')) {
+    const char* first_end = q;
+    while (first_end < L.e && !detail::is_space(*first_end)) ++first_end;
+    const bool starts_with_counts =
+        std::all_of(q, first_end, [](char c) { return (c >= '0' && c <= '9') || c == '+' || c == '-'; });
+    if (!starts_with_counts) {
         const char* kw = q;
         while (q < L.e && !detail::is_space(*q)) ++q;
         const std::string_view k(kw, std::size_t(q - kw));
@@ -106,10 +111,12 @@ Mesh read_off_memory(std::string_view bytes, const std::string& name, ReadInfo* 
         fail_line(kReader, name, L.line, "expected the vertex and face counts");
     int_token(q, L.e, ne, name, L.line);  // edge count: optional, ignored
     if (nv < 0 || nf < 0) fail_line(kReader, name, L.line, "negative vertex or face count");
-    // Each vertex takes at least 6 bytes ("0 0 0\n"), each face at least 8 ("3 0 0 0\n").
+    // Each vertex takes at least 6 bytes ("0 0 0\n") and each face at least 2 (its corner count and a
+    // newline; a face with too few corners is then reported on its own line, not as a bad count).
+    // The last line needs no newline, hence + 1.
     const auto left = std::uint64_t(L.end - L.p) + 1;
-    if (std::uint64_t(nv) > left / 6 || std::uint64_t(nf) > left / 8 ||
-        std::uint64_t(nv) * 6 + std::uint64_t(nf) * 8 > left)
+    if (std::uint64_t(nv) > left / 6 || std::uint64_t(nf) > left / 2 ||
+        std::uint64_t(nv) * 6 + std::uint64_t(nf) * 2 > left)
         fail_line(kReader, name, L.line,
                   "header claims " + std::to_string(nv) + " vertices and " + std::to_string(nf) +
                       " faces, more than the remaining " + std::to_string(left - 1) +

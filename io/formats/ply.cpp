@@ -242,8 +242,6 @@ Layout find_layout(const Header& h, const std::string& name) {
     if (L.indices < 0)
         detail::fail_line(kReader, name, L.face->line, "face element lacks a vertex_indices (or vertex_index) list");
     if (L.face->count == 0) detail::fail(kReader, name, "no faces (the face element has 0 entries)");
-    if (L.vertex->count > std::numeric_limits<std::uint32_t>::max())
-        detail::fail_line(kReader, name, L.vertex->line, "more than 2^32-1 vertices");
     return L;
 }
 
@@ -356,12 +354,16 @@ struct Tokens {
     const char* end;
     std::size_t line;
 
-    /// Next whitespace-separated token; empty at the end of the data.
-    std::string_view next() {
+    /// Skips whitespace and newlines up to the next token (or the end of the data).
+    void skip() {
         while (p < end && (detail::is_space(*p) || *p == '\n')) {
             if (*p == '\n') ++line;
             ++p;
         }
+    }
+    /// Next whitespace-separated token; empty at the end of the data.
+    std::string_view next() {
+        skip();
         const char* s = p;
         while (p < end && !detail::is_space(*p) && *p != '\n') ++p;
         return {s, std::size_t(p - s)};
@@ -373,11 +375,14 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
     using detail::fail_line;
     Tokens tk{bytes.data() + h.data_offset, bytes.data() + bytes.size(), h.lines + 1};
     const std::size_t nv = m.positions.size();
+    // Line where the current record starts: a record cut short by the end of the data is reported
+    // there (the line that is incomplete), not on the line after the last newline.
+    std::size_t record_line = tk.line;
     auto need = [&](const Element& e, std::uint64_t i) {
         const std::string_view t = tk.next();
         if (t.empty())
-            fail_line(kReader, name, tk.line, "truncated file: " + e.name + " " + std::to_string(i) + " of " +
-                                                  std::to_string(e.count) + " is incomplete");
+            fail_line(kReader, name, record_line, "truncated file: " + e.name + " " + std::to_string(i) + " of " +
+                                                      std::to_string(e.count) + " is incomplete");
         return t;
     };
     auto integer = [&](std::string_view t) {
@@ -398,6 +403,8 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
     for (const Element& e : h.elements) {
         const bool is_vertex = &e == L.vertex, is_face = &e == L.face;
         for (std::uint64_t i = 0; i < e.count; ++i) {
+            tk.skip();
+            record_line = tk.line;
             for (std::size_t k = 0; k < e.props.size(); ++k) {
                 const Property& pr = e.props[k];
                 if (!pr.is_list) {
@@ -426,7 +433,12 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
                     if (std::uint64_t(n) > bytes.size()) fail_line(kReader, name, tk.line, "absurd list length");
                     sink.poly.resize(std::size_t(n));
                     for (std::int64_t c = 0; c < n; ++c) {
-                        const std::int64_t v = integer(need(e, i));
+                        const std::string_view t = tk.next();
+                        if (t.empty())
+                            fail_line(kReader, name, record_line,
+                                      "truncated file: face " + std::to_string(i) + " of " + std::to_string(e.count) +
+                                          " has " + std::to_string(c) + " of its " + std::to_string(n) + " indices");
+                        const std::int64_t v = integer(t);
                         if (v < 0 || std::uint64_t(v) >= nv)
                             fail_line(kReader, name, tk.line, "vertex index " + std::to_string(v) +
                                                                   " out of range (the file has " + std::to_string(nv) +
@@ -450,7 +462,11 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
 Mesh read_ply_memory(std::string_view bytes, const std::string& name, ReadInfo* info) {
     const Header h = parse_header(bytes, name);
     const Layout L = find_layout(h, name);
+    // An absurd count is reported with the file size, before anything is allocated.
     check_counts(h, bytes.size() - h.data_offset, name);
+    if (L.vertex->count > std::numeric_limits<std::uint32_t>::max())
+        detail::fail_line(kReader, name, L.vertex->line,
+                          "header claims " + std::to_string(L.vertex->count) + " vertices, more than 2^32-1");
 
     Mesh m;
     m.positions.resize(std::size_t(L.vertex->count));

@@ -142,6 +142,7 @@ public:
             if (opt_.mode == SmoothMode::MeanCurvature) {
                 const auto t0 = Clock::now();
                 std::fill(hn_.begin(), hn_.end(), 0.0f);
+                phi2_ = phi_;  // refit_step writes only the active blocks of phi2_
                 for (int s = 0; s < opt_.normal_steps; ++s) {
                     refit_step(false);
                     tick(double(s + 1) / opt_.normal_steps);
@@ -810,21 +811,43 @@ private:
         return sum;
     }
 
+    /// Refit steps until D stops decreasing; φ ends as the iterate with the smallest D seen.
+    /// Buffers: phi_ (current), phi2_ (written by the step), aux_[1] (the previous iterate, kept
+    /// so that a step that raised D can be undone). Samples outside the active blocks are equal
+    /// in all three (refit_step writes only the active blocks).
     void refit_loop() {
-        target_curvature();
-        std::vector<double> ds;
+        target_curvature();  // may use phi2_ as scratch
+        phi2_ = phi_;
+        std::vector<float>& prev_phi = aux_[1];
+        prev_phi = phi_;
+        std::vector<double> ds;  // D of each iterate evaluated
         int steps = 0;
-        double prev = 0.0;
+        double prev = 0.0, d_end = 0.0;
+        bool stopped = false;
         for (int s = 0; s < opt_.refit_max_steps; ++s) {
-            const double d = refit_step(true);  // D of φ before this step
+            std::swap(phi2_, prev_phi);  // prev_phi ← φ_{s−1}; phi2_ is overwritten by the step
+            const double d = refit_step(true);  // D(φ_s); now phi2_ = φ_s, phi_ = φ_{s+1}
             ds.push_back(d);
-            ++steps;
             tick(0.5 + 0.5 * double(s + 1) / opt_.refit_max_steps);
-            if (s > 0 && !(d < prev * (1.0 - opt_.refit_tolerance))) break;
+            if (s > 0 && !(d < prev * (1.0 - opt_.refit_tolerance))) {
+                if (d > prev) {
+                    std::swap(phi_, prev_phi);  // φ_s raised D: back to φ_{s−1}
+                    d_end = prev;
+                    --steps;
+                } else {
+                    std::swap(phi_, phi2_);  // φ_s still (barely) lowered D: keep it
+                    d_end = d;
+                }
+                stopped = true;
+                break;
+            }
+            ++steps;
             prev = d;
         }
-        const double d_end = refit_energy();
-        ds.push_back(d_end);
+        if (!stopped) {
+            d_end = refit_energy();
+            ds.push_back(d_end);
+        }
         rep_.refit_energy_start.push_back(ds.front());
         rep_.refit_energy.push_back(d_end);
         rep_.refit_energy_steps.push_back(std::move(ds));

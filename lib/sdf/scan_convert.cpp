@@ -24,6 +24,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kUncertain = 0.1;  // |w − 1/2| below this is reported as uncertain
 constexpr int kRepresentatives = 4;
+constexpr double kOnSurface = 1e-3;  // samples nearer than this (in voxels) are on the surface
 
 struct BlockStats {
     std::uint32_t band = 0, uncertain = 0, evaluations = 0;
@@ -58,6 +59,11 @@ BlockStats process_block(const Context& c, const std::array<int, 3>& b, float* o
     bool in_grid[kBlockVoxels];
     std::uint32_t hint = hc.triangle;
     const double reach2 = c.reach * c.reach;
+    // Distance is 1-Lipschitz: d(p) >= d(centre) − |p − centre|. Samples where that bound reaches the
+    // band cannot be in it; skipping their query gives the same answer (not found) at no cost. The
+    // margin keeps the skip on the safe side of rounding.
+    const double dc = std::sqrt(hc.squared_distance);
+    const double skip_beyond = c.reach * (1.0 + 1e-9) + 1e-9 * c.h;
     for (int lk = 0; lk < kBlockDim; ++lk)
         for (int lj = 0; lj < kBlockDim; ++lj)
             for (int li = 0; li < kBlockDim; ++li) {
@@ -66,7 +72,9 @@ BlockStats process_block(const Context& c, const std::array<int, 3>& b, float* o
                 in_grid[n] = g.contains(i, j, k);
                 d[n] = kInf;
                 if (!in_grid[n]) continue;
-                const ClosestHit hit = c.q.closest_within(g.world(Vec3d(i, j, k)), reach2, hint);
+                const Vec3d p = g.world(Vec3d(i, j, k));
+                if (dc - norm(p - center) > skip_beyond) continue;
+                const ClosestHit hit = c.q.closest_within(p, reach2, hint);
                 if (hit.found()) {
                     d[n] = std::sqrt(hit.squared_distance);
                     hint = hit.triangle;
@@ -126,7 +134,9 @@ BlockStats process_block(const Context& c, const std::array<int, 3>& b, float* o
     auto evaluate = [&](int n) {
         const double w = (*c.wn)(pos(n));
         ++st.evaluations;
-        if (d[n] < band && std::abs(w - 0.5) < kUncertain) ++st.uncertain;
+        // A sample on the surface itself (d <= 1e-3 h: a grid point on a face, edge or vertex) sees
+        // w ≈ 1/2 on any mesh; its sign changes phi by at most 2e-3 h, so it is not reported.
+        if (d[n] < band && d[n] > kOnSurface * c.h && std::abs(w - 0.5) < kUncertain) ++st.uncertain;
         return w;
     };
     for (int r = 0; r < kBlockVoxels; ++r) {
@@ -348,6 +358,41 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
             }
         });
     });
+    // 4. Tile conflicts. extract_surface visits only cubes with a corner in an allocated block, so two
+    // unallocated blocks that share a cube (26-neighbours) must have the same tile sign, and no inside
+    // tile may touch the grid border. On a closed mesh this always holds; near the holes of an open
+    // mesh the row scan can disagree between rows, or an inside region can run out to the border.
+    // Allocate every inside tile that touches an outside tile (filled with -background): the level
+    // set then closes between them. Marked in parallel, allocated in block order (deterministic).
+    std::vector<std::uint8_t> conflict(vol.block_table.size(), 0);
+    arena.execute([&] {
+        tbb::parallel_for(tbb::blocked_range<int>(0, bd[1] * bd[2], 16), [&](const auto& range) {
+            for (int row = range.begin(); row != range.end(); ++row) {
+                const int bj = row % bd[1], bk = row / bd[1];
+                for (int bi = 0; bi < bd[0]; ++bi) {
+                    if (vol.block_table[vol.table_index(bi, bj, bk)] != kBlockInside) continue;
+                    bool hit = false;
+                    for (int dk = -1; dk <= 1 && !hit; ++dk)
+                        for (int dj = -1; dj <= 1 && !hit; ++dj)
+                            for (int di = -1; di <= 1 && !hit; ++di) {
+                                const int ni = bi + di, nj = bj + dj, nk = bk + dk;
+                                // Beyond the grid counts as outside (extract_surface reads +background there).
+                                hit = ni < 0 || nj < 0 || nk < 0 || ni >= bd[0] || nj >= bd[1] || nk >= bd[2] ||
+                                      vol.block_table[vol.table_index(ni, nj, nk)] == kBlockOutside;
+                            }
+                    conflict[vol.table_index(bi, bj, bk)] = hit;
+                }
+            }
+        });
+    });
+    for (int bk = 0; bk < bd[2]; ++bk)
+        for (int bj = 0; bj < bd[1]; ++bj)
+            for (int bi = 0; bi < bd[0]; ++bi)
+                if (conflict[vol.table_index(bi, bj, bk)]) {
+                    vol.allocate_block(bi, bj, bk);
+                    ++rep.tile_conflict_blocks;
+                }
+    conflict = {};
     rep.seconds_sign += seconds_since(t_tile0);
 
     rep.blocks = vol.block_count();
@@ -356,6 +401,10 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
         rep.warnings.push_back("scan_convert: " + std::to_string(rep.uncertain_sign) +
                                " band samples have an uncertain sign (winding number within 0.1 of 1/2): the mesh "
                                "has holes or open boundaries there");
+    if (rep.tile_conflict_blocks > 0)
+        rep.warnings.push_back("scan_convert: " + std::to_string(rep.tile_conflict_blocks) +
+                               " blocks away from the surface had an inside/outside conflict (open mesh) and were "
+                               "stored as inside, so the extracted surface stays closed");
     if (report) *report = std::move(rep);
     return vol;
 }

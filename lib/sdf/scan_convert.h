@@ -28,8 +28,9 @@ struct ScanConvertReport {
     std::size_t band_voxels = 0;      ///< samples with |phi| < half_width · h
     std::size_t blocks = 0;           ///< allocated 8³ blocks
     std::size_t candidate_blocks = 0; ///< blocks examined (near a triangle's bounding box)
-    std::size_t uncertain_sign = 0;   ///< band samples whose winding number was within 0.1 of 1/2
+    std::size_t uncertain_sign = 0;   ///< band samples > 1e-3 h off the surface whose winding number was within 0.1 of 1/2
     std::size_t winding_evaluations = 0;  ///< winding number queries made
+    std::size_t tile_conflict_blocks = 0; ///< inside tiles next to outside tiles, allocated (see scan_convert)
     double seconds_distance = 0;      ///< wall time: distances, band and block signs
     double seconds_sign = 0;          ///< wall time: winding-number tree build and tile signs
     std::size_t memory_bytes = 0;     ///< bytes held by the returned volume
@@ -52,7 +53,9 @@ struct ScanConvertReport {
 /// 0.1 of 1/2, w is evaluated at every sample of the set. Unallocated blocks get their tile sign
 /// (inside / outside) by a scan along x over block rows, starting outside at the grid border and
 /// taking the sign of the last x-layer of each allocated block (adjacent samples farther than h
-/// from the surface share a sign). Memory and time grow with the surface area (plus one int32 per
+/// from the surface share a sign). Near the holes of an open mesh two neighbouring rows can disagree;
+/// every inside tile that touches (26-neighbourhood) an outside tile or the grid border is then allocated, filled with
+/// −background, so that extraction stays closed (report->tile_conflict_blocks, with a warning). Memory and time grow with the surface area (plus one int32 per
 /// 512 grid samples for the block table), not with the bounding volume.
 ///
 /// Accepted input: any triangle soup — holes, non-manifold edges, several components, nested shells,

@@ -19,19 +19,23 @@ namespace normalflow {
 /// The sign convention depends on the orientation: a reversed mesh gives −w. Inconsistently
 /// oriented soups should be oriented first (io/cgal repair); this class takes the mesh as given.
 ///
-/// Method: a BVH over the triangles (8 per leaf). Each node stores its area-weighted centre p̃, its
-/// area vector N = Σ a_f n_f, the first-moment tensor Σ a_f n_f (c_f − p̃)ᵀ and a radius r. A node
-/// farther than beta·r from p contributes its second-order far-field (dipole + quadrupole)
-/// expansion; nearer leaves are summed exactly with the Van Oosterom–Strackee solid angle
-/// formula (1983). beta = 2 gives errors around 1e-3 (Barill et al. §3.3).
+/// Method: a BVH over the triangles (8 per leaf). Each node stores, about its area-weighted centre
+/// p̃, the area vector N = Σ a_f n_f, the first moment M = Σ a_f n_f (c_f − p̃)ᵀ and the second
+/// moment T_abc = Σ n_fa ∫_f (x − p̃)_b (x − p̃)_c dA, and a radius r (p̃ to the farthest box corner).
+/// A node farther than beta·r from p contributes the Taylor expansion of the kernel
+/// G(x − p) = (x − p)/|x − p|³ to its second derivative (Barill et al. 2018 §3.2; libigl's
+/// expansion order 2); nearer leaves are summed exactly with the Van Oosterom–Strackee solid angle
+/// formula (1983). The truncation error falls like beta⁻³: measured on a 5120-face unit icosphere,
+/// max |fast − exact| is 2.3e-3 at beta = 2 and 1e-4 at beta = 4 (a first-order-only expansion gave
+/// 0.06 at beta = 2; tests/sdf/test_winding_number.cpp).
 ///
-/// Cost: O(#F log #F) to build; about O(log #F) per query far from the surface, more near it.
+/// Cost: O(#F log #F) to build (TBB parallel over nodes, deterministic), 34 doubles per 4 faces; about O(log #F) per query far from the surface, more near it.
 /// operator() is const and thread-safe. Copies what it needs from the mesh.
 class WindingNumber {
 public:
     /// \param m any triangle soup; zero-area triangles contribute nothing.
     /// \param beta far-field acceptance factor (>= 1; larger is more accurate and slower).
-    /// \throw InvalidInput for an out-of-range vertex index or a non-finite position.
+    /// \throw InvalidInput for an out-of-range vertex index, a non-finite position or beta < 1.
     explicit WindingNumber(const Mesh& m, double beta = 2.0);
     ~WindingNumber();
     WindingNumber(WindingNumber&&) noexcept;

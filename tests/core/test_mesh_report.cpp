@@ -1,5 +1,5 @@
 // Tests for lib/core/mesh_report.h: analytic cases with known answers, then properties, then bad input.
-// The real-data table (every mesh in shared/data against SOURCES.md) is tests/io/test_shared_data_counts.cpp.
+// The real-data table (every mesh in shared/data against SOURCES.md) is tests/io/test_shared_data.cpp.
 #include "core/mesh_report.h"
 
 #include <gtest/gtest.h>

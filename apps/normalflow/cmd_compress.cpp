@@ -1,0 +1,70 @@
+// normalflow compress IN OUT.(drc|glb) [--position-bits 14] [--normal-bits 10] [--level 7] [--fallback]
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "core/errors.h"
+#include "io/draco/draco_io.h"
+#include "io/io.h"
+
+namespace normalflow::cli {
+namespace {
+
+struct CompressArgs {
+    std::string input, output;
+    DracoOptions draco;
+    OutputFlags out;
+};
+
+int run_compress(const CompressArgs& a) {
+    Stopwatch clock;
+    const MeshFormat f = mesh_format_from_path(a.output);
+    if (f != MeshFormat::Drc && f != MeshFormat::Glb)
+        throw InvalidInput("compress: " + a.output + ": output must be .drc or .glb");
+    const Mesh m = read_mesh(a.input);
+    const double t_read = clock.lap();
+    if (f == MeshFormat::Drc) write_drc(a.output, m, a.draco);
+    else write_draco_glb(a.output, m, a.draco);
+    const double t_write = clock.lap();
+    const auto in_bytes = std::filesystem::file_size(a.input);
+    const auto out_bytes = std::filesystem::file_size(a.output);
+    // Raw size: float32 positions + uint32 indices.
+    const std::size_t raw = m.positions.size() * 12 + m.triangles.size() * 12;
+    if (a.out.json) {
+        Json j = Json::object();
+        j.set("command", "compress").set("input", a.input).set("output", a.output)
+            .set("vertices", m.positions.size()).set("triangles", m.triangles.size())
+            .set("bytes_before", static_cast<std::size_t>(in_bytes)).set("bytes_raw", raw)
+            .set("bytes_after", static_cast<std::size_t>(out_bytes))
+            .set("position_bits", a.draco.position_bits).set("compression_level", a.draco.compression_level)
+            .set("seconds_read", t_read).set("seconds_compress", t_write);
+        std::printf("%s\n", j.dump().c_str());
+    } else if (!a.out.quiet) {
+        std::printf("compress: %s (%zu bytes) -> %s (%zu bytes, %.1fx; raw %zu bytes) in %.3f s\n", a.input.c_str(),
+                    static_cast<std::size_t>(in_bytes), a.output.c_str(), static_cast<std::size_t>(out_bytes),
+                    out_bytes ? double(in_bytes) / double(out_bytes) : 0.0, raw, t_write);
+    }
+    return 0;
+}
+
+}  // namespace
+
+void add_compress_command(CLI::App& app) {
+    auto a = std::make_shared<CompressArgs>();
+    auto* cmd = app.add_subcommand("compress", "write a mesh as Draco (.drc) or Draco-compressed glTF (.glb)");
+    cmd->add_option("IN", a->input, "mesh file")->required();
+    cmd->add_option("OUT", a->output, "output .drc or .glb")->required();
+    cmd->add_option("--position-bits", a->draco.position_bits, "quantization bits per position axis")
+        ->check(CLI::Range(1, 30))->capture_default_str();
+    cmd->add_option("--normal-bits", a->draco.normal_bits, "quantization bits per normal component")
+        ->check(CLI::Range(1, 30))->capture_default_str();
+    cmd->add_option("--level", a->draco.compression_level, "compression level 0 (fast) .. 10 (small)")
+        ->check(CLI::Range(0, 10))->capture_default_str();
+    cmd->add_flag("--fallback", a->draco.fallback, ".glb: also store uncompressed buffers for viewers without Draco");
+    add_output_flags(cmd, a->out);
+    on_run(cmd, a, run_compress);
+}
+
+}  // namespace normalflow::cli

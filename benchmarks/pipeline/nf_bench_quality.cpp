@@ -1,0 +1,171 @@
+// nf_bench_quality: quality of the normal-map engine on real noisy / ground-truth pairs.
+//
+// For every pair NAME_<noise>.ply / NAME_gt.ply in shared/data/pairs_gnf and pairs_gcn: scan-convert
+// the noisy mesh (resolution R along the longest side), smooth it isotropically and anisotropically
+// (smooth_volume), extract the surface, and report the distance and the mean normal-angle error to
+// the ground truth (surface_distance: points sampled uniformly by area on the result, angle between
+// the result's face normal there and the ground truth's face normal at the closest point), next to
+// the noisy input. Distances are in voxels of the grid (h = longest side / R).
+//
+// usage: nf_bench_quality [--data DIR] [--resolution R] [--iterations K] [--mu MU] [--presmooth S]
+//                         [--normal-dt DT] [--normal-steps N] [--samples S] [--only SUBSTRING]...
+//                         [--modes iso,aniso,floor] [--out DIR] [--threads T]
+// (floor: the ground truth scan-converted and extracted without smoothing, the error floor of the grid)
+// Prints one table row per pair and mode on stdout (and, with --out DIR, writes the meshes there).
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+#include "extract/extract_surface.h"
+#include "io/io.h"
+#include "metrics/surface_distance.h"
+#include "normals/smooth.h"
+#include "sdf/scan_convert.h"
+#include "sdf/triangle_bvh.h"
+
+namespace fs = std::filesystem;
+using namespace normalflow;
+
+namespace {
+
+struct Pair {
+    std::string name;  // e.g. pairs_gnf/fandisk_n0.3
+    fs::path noisy, truth;
+};
+
+std::vector<Pair> find_pairs(const fs::path& data) {
+    std::vector<Pair> pairs;
+    for (const char* set : {"pairs_gnf", "pairs_gcn"}) {
+        const fs::path dir = data / set;
+        if (!fs::is_directory(dir)) continue;
+        std::vector<fs::path> files;
+        for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path());
+        std::sort(files.begin(), files.end());
+        for (const auto& f : files) {
+            const std::string stem = f.stem().string();
+            if (f.extension() != ".ply" || stem.ends_with("_gt") || stem.find("result") != std::string::npos)
+                continue;
+            const auto us = stem.rfind('_');
+            if (us == std::string::npos) continue;
+            const fs::path gt = dir / (stem.substr(0, us) + "_gt.ply");
+            if (fs::exists(gt)) pairs.push_back({std::string(set) + "/" + stem, f, gt});
+        }
+    }
+    return pairs;
+}
+
+double seconds(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    // shared/data beside the checkout (this file is <repo>/benchmarks/pipeline/nf_bench_quality.cpp)
+    fs::path data = fs::path(__FILE__).parent_path() / "../../../shared/data";
+    int resolution = 256;
+    SmoothOptions base;
+    SurfaceSamplingOptions sampling;
+    sampling.samples = 100000;
+    std::vector<std::string> only;
+    std::string modes = "iso,aniso";
+    fs::path out;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&]() -> std::string {
+            if (i + 1 >= argc) {
+                std::fprintf(stderr, "nf_bench_quality: %s needs a value\n", a.c_str());
+                std::exit(2);
+            }
+            return argv[++i];
+        };
+        if (a == "--data") data = next();
+        else if (a == "--resolution") resolution = std::stoi(next());
+        else if (a == "--iterations") base.iterations = std::stoi(next());
+        else if (a == "--mu") base.mu = std::stof(next());
+        else if (a == "--presmooth") base.conductance_presmooth_steps = std::stoi(next());
+        else if (a == "--normal-dt") base.normal_dt = std::stof(next());
+        else if (a == "--normal-steps") base.normal_steps = std::stoi(next());
+        else if (a == "--samples") sampling.samples = std::stoul(next());
+        else if (a == "--only") only.push_back(next());
+        else if (a == "--modes") modes = next();
+        else if (a == "--out") out = next();
+        else if (a == "--threads") base.threads = std::stoi(next());
+        else {
+            std::fprintf(stderr, "nf_bench_quality: unknown argument %s\n", a.c_str());
+            return 2;
+        }
+    }
+    auto selected = [&](const std::string& key) {
+        return ("," + modes + ",").find("," + key + ",") != std::string::npos;
+    };
+    const std::vector<Pair> pairs = find_pairs(data);
+    if (pairs.empty()) {
+        std::fprintf(stderr, "nf_bench_quality: no pairs under %s (pairs_gnf, pairs_gcn)\n", data.string().c_str());
+        return 1;
+    }
+    std::printf("resolution %d, iterations %d, normal_steps %d, normal_dt %g, mu %g, presmooth %d, samples %zu\n",
+                resolution, base.iterations, base.normal_steps, double(base.normal_dt), double(base.mu),
+                base.conductance_presmooth_steps, sampling.samples);
+    std::printf("%-28s %-11s %10s %10s %10s %9s %9s\n", "pair", "result", "mean(vox)", "rms(vox)", "haus(vox)",
+                "angle(deg)", "seconds");
+    std::fflush(stdout);
+    int failures = 0;
+    for (const Pair& p : pairs) {
+        if (!only.empty() && std::none_of(only.begin(), only.end(), [&](const std::string& s) {
+                return p.name.find(s) != std::string::npos;
+            }))
+            continue;
+        try {
+            const Mesh noisy = read_mesh(p.noisy.string());
+            const Mesh truth = read_mesh(p.truth.string());
+            ScanConvertOptions so;
+            so.resolution = resolution;
+            so.half_width = 3.0f;
+            so.threads = base.threads;
+            auto t0 = std::chrono::steady_clock::now();
+            const Volume v = scan_convert(noisy, *make_bvh_query(noisy), so);
+            const double t_vox = seconds(t0);
+            const double h = v.grid.voxel_size;
+            auto row = [&](const char* what, const Mesh& m, double secs) {
+                const SurfaceDistance d = surface_distance(m, truth, sampling);
+                std::printf("%-28s %-11s %10.4f %10.4f %10.3f %9.2f %9.2f\n", p.name.c_str(), what, d.mean / h,
+                            d.rms / h, d.hausdorff / h, d.mean_normal_angle_deg, secs);
+                std::fflush(stdout);
+            };
+            row("noisy", noisy, t_vox);
+            if (selected("floor")) {  // the ground truth through scan conversion and extraction only
+                const Volume g = scan_convert(truth, *make_bvh_query(truth), so);
+                row("gt-voxel", extract_surface(g), 0.0);
+            }
+            for (const auto& [key, mode] : {std::pair{"iso", SmoothMode::Isotropic},
+                                             std::pair{"aniso", SmoothMode::Anisotropic}}) {
+                if (!selected(key)) continue;
+                Volume w = v;
+                SmoothOptions o = base;
+                o.mode = mode;
+                t0 = std::chrono::steady_clock::now();
+                const SmoothReport rep = smooth_volume(w, o);
+                const Mesh m = extract_surface(w);
+                const double secs = seconds(t0);
+                row(to_string(mode), m, secs);
+                if (!out.empty()) {
+                    fs::create_directories(out);
+                    write_mesh((out / (p.noisy.stem().string() + "_" + key + ".ply")).string(), m);
+                }
+                (void)rep;
+            }
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "%s: %s\n", p.name.c_str(), e.what());
+            ++failures;
+        }
+    }
+    return failures ? 1 : 0;
+}

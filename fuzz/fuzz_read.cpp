@@ -1,0 +1,90 @@
+// libFuzzer target for one normalflow reader, chosen at compile time: NF_FUZZ_FORMAT is the file
+// extension without its dot ("obj", "ply", "off", "stl", "glb", "drc", "nrrd", "vdb").
+//
+// Contract under test (issue 7): any byte string either reads into a valid Mesh/Volume or throws
+// InvalidInput / IoError / OutOfMemory. Any other exception, a crash, a leak, a hang, or a result
+// that breaks the type's invariant (index out of range, non-finite value) is a finding.
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <string_view>
+
+#include <unistd.h>
+
+#include "core/errors.h"
+#include "io/formats/mesh_formats.h"
+#include "io/io.h"
+
+#ifndef NF_FUZZ_FORMAT
+#error "define NF_FUZZ_FORMAT"
+#endif
+#define NF_STR2(x) #x
+#define NF_STR(x) NF_STR2(x)
+
+namespace {
+
+using namespace normalflow;
+
+const std::string kExt = NF_STR(NF_FUZZ_FORMAT);
+
+[[noreturn]] void finding(const char* what) {
+    std::fprintf(stderr, "fuzz_read_%s: %s\n", kExt.c_str(), what);
+    std::abort();
+}
+
+void check(const Mesh& m) {
+    for (const Vec3f& p : m.positions)
+        if (!is_finite(p)) finding("a reader returned a non-finite position");
+    for (const Tri& t : m.triangles)
+        for (std::uint32_t i : t)
+            if (i >= m.positions.size()) finding("a reader returned a face index out of range");
+}
+
+void check(const Volume& v) {
+    if (!(v.grid.voxel_size > 0) || !std::isfinite(v.grid.voxel_size)) finding("volume with a bad voxel size");
+    for (float x : v.values)
+        if (!std::isfinite(x)) finding("a reader returned a non-finite sample");
+}
+
+/// Readers that only take a path get the bytes through a private temporary file.
+std::string temp_path() {
+    static const std::string path = [] {
+        const char* dir = access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp";
+        return std::string(dir) + "/nf_fuzz_" + std::to_string(getpid()) + "." + kExt;
+    }();
+    return path;
+}
+
+std::string through_file(std::string_view bytes) {
+    const std::string path = temp_path();
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) finding("cannot write the temporary file");
+    if (!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), f) != bytes.size()) finding("short write");
+    std::fclose(f);
+    return path;
+}
+
+void read_one(std::string_view bytes) {
+    const std::string name = "fuzz." + kExt;
+    if (kExt == "obj") return check(read_obj_memory(bytes, name));
+    if (kExt == "ply") return check(read_ply_memory(bytes, name));
+    if (kExt == "off") return check(read_off_memory(bytes, name));
+    if (kExt == "stl") return check(read_stl_memory(bytes, name));
+    const std::string path = through_file(bytes);
+    if (is_volume_path(path)) return check(read_volume(path));
+    return check(read_mesh(path));
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    try {
+        read_one(std::string_view(reinterpret_cast<const char*>(data), size));
+    } catch (const normalflow::InvalidInput&) {
+    } catch (const normalflow::IoError&) {
+    } catch (const normalflow::OutOfMemory&) {
+    }
+    return 0;
+}

@@ -1,0 +1,149 @@
+#include "metrics/noise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/mesh_report.h"
+
+namespace normalflow {
+
+namespace detail {
+
+NormalRng::NormalRng(std::uint64_t seed) : engine_(seed) {}
+
+double NormalRng::uniform() { return double(engine_() >> 11) * 0x1.0p-53; }
+
+double NormalRng::normal() {
+    if (has_spare_) {
+        has_spare_ = false;
+        return spare_;
+    }
+    double u1 = uniform();
+    while (u1 <= 0.0) u1 = uniform();  // log(0) guard
+    const double u2 = uniform();
+    const double r = std::sqrt(-2.0 * std::log(u1));
+    const double a = 2.0 * std::numbers::pi * u2;
+    spare_ = r * std::sin(a);
+    has_spare_ = true;
+    return r * std::cos(a);
+}
+
+std::uint64_t NormalRng::below(std::uint64_t n) {
+    // Rejection: accept x < limit, the largest multiple of n representable, then x % n is unbiased.
+    const std::uint64_t limit = (~std::uint64_t(0) / n) * n;
+    std::uint64_t x = engine_();
+    while (x >= limit) x = engine_();
+    return x % n;
+}
+
+}  // namespace detail
+
+namespace {
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> unique_edges(const Mesh& w) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> e;
+    e.reserve(3 * w.triangles.size());
+    for (const Tri& t : w.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+            if (a != b) e.emplace_back(std::min(a, b), std::max(a, b));
+        }
+    std::sort(e.begin(), e.end());
+    e.erase(std::unique(e.begin(), e.end()), e.end());
+    return e;
+}
+
+double mean_length(const Mesh& w, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& e) {
+    if (e.empty()) return 0.0;
+    double s = 0;
+    for (const auto& [a, b] : e) s += norm(Vec3d(w.positions[a]) - Vec3d(w.positions[b]));
+    return s / double(e.size());
+}
+
+Vec3d random_unit(detail::NormalRng& rng) {
+    for (;;) {
+        const Vec3d d{rng.normal(), rng.normal(), rng.normal()};
+        const double n = norm(d);
+        if (n > 1e-12) return d / n;
+    }
+}
+
+}  // namespace
+
+double mean_edge_length(const Mesh& m) {
+    const Mesh w = weld_exact(m);
+    return mean_length(w, unique_edges(w));
+}
+
+NoiseReport add_noise(Mesh& m, const NoiseOptions& opt) {
+    if (m.triangles.empty()) throw InvalidInput("add_noise: mesh has no triangles");
+    if (!(opt.sigma >= 0) || !std::isfinite(opt.sigma))
+        throw InvalidInput("add_noise: sigma " + std::to_string(opt.sigma) + ", expected a finite value >= 0");
+    if (!(opt.impulsive_fraction >= 0 && opt.impulsive_fraction <= 1))
+        throw InvalidInput("add_noise: impulsive_fraction " + std::to_string(opt.impulsive_fraction) +
+                           " out of range, expected [0, 1]");
+    std::vector<std::uint32_t> old_to_new;
+    Mesh w;
+    try {
+        w = weld_exact(m, &old_to_new);
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(std::string("add_noise: ") + e.what());
+    }
+    NoiseReport r;
+    r.mean_edge_length = mean_length(w, unique_edges(w));
+    r.sigma_world = opt.sigma * r.mean_edge_length;
+
+    const std::size_t nv = w.positions.size();
+    std::vector<Vec3d> normal(nv);
+    std::vector<char> referenced(nv, 0);
+    for (const Tri& t : w.triangles) {
+        const Vec3d n = face_area_vector(w, t);
+        for (std::uint32_t v : t) {
+            normal[v] += n;
+            referenced[v] = 1;
+        }
+    }
+    std::vector<std::uint32_t> verts;
+    for (std::uint32_t v = 0; v < nv; ++v)
+        if (referenced[v]) verts.push_back(v);
+    r.vertices = verts.size();
+
+    detail::NormalRng rng(opt.seed);
+    std::vector<std::uint32_t> chosen;
+    if (opt.kind == NoiseKind::Impulsive) {
+        const auto k = std::size_t(std::llround(opt.impulsive_fraction * double(verts.size())));
+        std::vector<std::uint32_t> pool = verts;  // partial Fisher–Yates: the first k of a shuffle
+        for (std::size_t i = 0; i < k; ++i) std::swap(pool[i], pool[i + rng.below(pool.size() - i)]);
+        chosen.assign(pool.begin(), pool.begin() + std::ptrdiff_t(k));
+        std::sort(chosen.begin(), chosen.end());  // displacements drawn in index order
+    } else {
+        chosen = verts;
+    }
+
+    std::vector<Vec3d> disp(nv);
+    double s2 = 0;
+    for (std::uint32_t v : chosen) {
+        Vec3d dir;
+        if (opt.direction == NoiseDirection::Normal && squared_norm(normal[v]) > 0) {
+            dir = normalized(normal[v]);
+        } else {
+            dir = random_unit(rng);
+        }
+        const double len = rng.normal() * r.sigma_world;
+        disp[v] = dir * len;
+        s2 += len * len;
+    }
+    r.displaced = chosen.size();
+    r.rms_displacement = chosen.empty() ? 0.0 : std::sqrt(s2 / double(chosen.size()));
+    for (std::size_t k = 0; k < m.positions.size(); ++k) {
+        const std::uint32_t v = old_to_new[k];
+        if (referenced[v]) m.positions[k] = Vec3f(Vec3d(w.positions[v]) + disp[v]);
+    }
+    return r;
+}
+
+}  // namespace normalflow

@@ -1,0 +1,61 @@
+#!/bin/sh
+# CLI bad input (issue 2): every failure exits non-zero with exactly one stderr line naming the
+# file, leaves no output file behind and never damages an existing one; info --json parses.
+# Usage: cli_bad_input.sh NORMALFLOW_BINARY FIXTURES_DIR REPO_ROOT
+set -u
+nf="$1"; fixtures="$2"; root="$3"
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/nf_cli.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# expect_error NAME_IN_MESSAGE CMD...: non-zero exit, exactly one stderr line, which names the file
+expect_error() {
+  needle="$1"; shift
+  "$@" >"$tmp/out.txt" 2>"$tmp/err.txt"; rc=$?
+  [ "$rc" -ne 0 ] || fail "$*: exit status 0"
+  lines=$(wc -l <"$tmp/err.txt")
+  [ "$lines" -eq 1 ] || fail "$*: $lines stderr lines: $(cat "$tmp/err.txt")"
+  grep -qF -- "$needle" "$tmp/err.txt" || fail "$*: stderr does not name $needle: $(cat "$tmp/err.txt")"
+  echo "ok (rc $rc): $(cat "$tmp/err.txt")"
+}
+
+: >"$tmp/empty.ply"
+printf '\001\377garbage\000\033bytes\n\377\376' >"$tmp/garbage.obj"
+cp "$fixtures/cube_ascii.ply" "$tmp/cube.xyz"
+expect_error "$tmp/missing.ply" "$nf" info "$tmp/missing.ply"
+expect_error "$tmp/empty.ply" "$nf" info "$tmp/empty.ply"
+expect_error "$tmp/garbage.obj" "$nf" info "$tmp/garbage.obj"
+expect_error "$tmp/cube.xyz" "$nf" info "$tmp/cube.xyz"
+expect_error "/nonexistent/dir/out.ply" "$nf" smooth "$root/examples/noisy_part.ply" /nonexistent/dir/out.ply \
+  --resolution 32 --iterations 1
+[ ! -e /nonexistent/dir ] || fail "/nonexistent/dir was created"
+
+# an existing output file is left byte-identical when the run fails
+printf 'precious contents\n' >"$tmp/keep.ply"
+cp "$tmp/keep.ply" "$tmp/keep.orig"
+expect_error "$tmp/garbage.obj" "$nf" smooth "$tmp/garbage.obj" "$tmp/keep.ply" --resolution 32 --iterations 1
+cmp -s "$tmp/keep.ply" "$tmp/keep.orig" || fail "existing output changed by a failed run"
+extra=$(ls "$tmp" | grep -v -e '^empty.ply$' -e '^garbage.obj$' -e '^cube.xyz$' -e '^keep.ply$' -e '^keep.orig$' \
+  -e '^out.txt$' -e '^err.txt$')
+[ -z "$extra" ] || fail "files left behind: $extra"
+
+# info --json: the last stdout line is a JSON object with the right counts
+"$nf" info --json "$fixtures/cube_ascii.ply" >"$tmp/out.txt" 2>"$tmp/err.txt" || fail "info --json failed"
+python3 - "$tmp/out.txt" <<'PY' || fail "info --json output wrong"
+import json, sys
+d = json.loads(open(sys.argv[1]).read().splitlines()[-1])
+assert d["vertices"] == 8 and d["triangles"] == 12, d
+assert d["boundary_edges"] == 0 and d["closed"] is True and d["components"] == 1, d
+assert d["euler_characteristic"] == 2 and d["polygons_split"] == 6, d
+PY
+"$nf" info --json --repair "$fixtures/cube_ascii.ply" >"$tmp/out.txt" 2>"$tmp/err.txt" || fail "info --repair failed"
+python3 - "$tmp/out.txt" <<'PY' || fail "info --repair --json output wrong"
+import json, sys
+d = json.loads(open(sys.argv[1]).read().splitlines()[-1])
+assert d["repaired"] is True and d["repair"]["duplicates_removed"] == 0, d
+assert d["triangles"] == 12 and d["closed"] is True, d
+PY
+
+[ "$failures" -eq 0 ] || { echo "$failures failure(s)"; exit 1; }
+echo "all CLI bad-input checks passed"

@@ -1,0 +1,538 @@
+// Tests of the level-set normal-map engine (lib/normals/smooth.h): analytic cases with known answers
+// (sphere drift, mean curvature flow radius), energy decrease, feature preservation, high-boost,
+// independence of the triangulation and of the thread count, cancellation and bad input.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "core/volume.h"
+#include "extract/extract_surface.h"
+#include "io/io.h"
+#include "metrics/surface_distance.h"
+#include "normals/smooth.h"
+#include "sdf/scan_convert.h"
+#include "sdf/triangle_bvh.h"
+#include "volume_fixtures.h"
+
+namespace normalflow {
+namespace {
+
+using test::add_noise;
+using test::box_sdf;
+using test::equivalent_radius;
+using test::make_volume;
+using test::sphere_sdf;
+using test::total_curvature;
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// Default options with the paper's 25 normal steps per main iteration (fast tests).
+SmoothOptions options(SmoothMode mode, int iterations) {
+    SmoothOptions o;
+    o.mode = mode;
+    o.iterations = iterations;
+    o.normal_steps = 25;
+    return o;
+}
+
+/// Mean and max |‖p − c‖ − mean radius| of the extracted surface's vertices (voxels, h = 1).
+struct RadialStats {
+    double mean_radius = 0, max_deviation = 0;
+};
+RadialStats radial_stats(const Volume& v, const Vec3d& c) {
+    const Mesh m = extract_surface(v);
+    RadialStats s;
+    if (m.positions.empty()) return s;
+    for (const auto& p : m.positions) s.mean_radius += norm(Vec3d(p) - c);
+    s.mean_radius /= double(m.positions.size());
+    for (const auto& p : m.positions)
+        s.max_deviation = std::max(s.max_deviation, std::abs(norm(Vec3d(p) - c) - s.mean_radius));
+    return s;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Known answers
+
+TEST(SmoothVolume, SphereDoesNotDriftIsotropic) {
+    const Vec3d c(24.3, 23.8, 24.1);
+    Volume v = make_volume(48, 1.0, sphere_sdf(c, 14.0));
+    const double r0 = equivalent_radius(v);
+    SmoothOptions o;  // library defaults (50 normal steps per main iteration)
+    o.mode = SmoothMode::Isotropic;
+    o.iterations = 5;
+    const SmoothReport rep = smooth_volume(v, o);
+    EXPECT_EQ(rep.iterations, 5);
+    const double r1 = equivalent_radius(v);
+    std::printf("isotropic sphere: r0 %.4f r1 %.4f (voxels)\n", r0, r1);
+    EXPECT_LT(std::abs(r1 - r0), 0.05);
+    EXPECT_LT(radial_stats(v, c).max_deviation, 0.15);  // still a sphere
+}
+
+TEST(SmoothVolume, SphereDoesNotDriftAnisotropic) {
+    const Vec3d c(24.3, 23.8, 24.1);
+    Volume v = make_volume(48, 1.0, sphere_sdf(c, 14.0));
+    const double r0 = equivalent_radius(v);
+    SmoothOptions o;  // library defaults
+    o.iterations = 5;
+    smooth_volume(v, o);
+    const double r1 = equivalent_radius(v);
+    std::printf("anisotropic sphere: r0 %.4f r1 %.4f (voxels)\n", r0, r1);
+    EXPECT_LT(std::abs(r1 - r0), 0.05);
+    EXPECT_LT(radial_stats(v, c).max_deviation, 0.15);
+}
+
+TEST(SmoothVolume, SphereDoesNotDriftWithVoxelSize) {
+    // world units: the same sphere at h = 0.05 must behave exactly as at h = 1 (engine works in voxels)
+    const double h = 0.05;
+    const Vec3d c(24.3 * h, 23.8 * h, 24.1 * h);
+    Volume v = make_volume(48, h, sphere_sdf(c, 14.0 * h));
+    const double r0 = equivalent_radius(v);
+    smooth_volume(v, options(SmoothMode::Isotropic, 2));
+    EXPECT_LT(std::abs(equivalent_radius(v) - r0), 0.05);
+    EXPECT_FLOAT_EQ(v.background, float(8.0 * h));
+}
+
+TEST(SmoothVolume, MeanCurvatureFlowShrinksSphereAsSqrtR0SquaredMinus4t) {
+    // φ_t = |∇φ| H with H = κ1 + κ2 = 2/r: dr/dt = −2/r, so r(t)² = r0² − 4t (voxel units, h = 1).
+    const double r0 = 16.0;
+    const Vec3d c(26.2, 25.9, 26.4);
+    Volume v = make_volume(52, 1.0, sphere_sdf(c, r0));
+    const double r0_measured = equivalent_radius(v);
+    SmoothOptions o = options(SmoothMode::MeanCurvature, 1);
+    o.normal_steps = 50;
+    o.refit_dt = 0.1f;
+    double t = 0.0;
+    for (int round = 0; round < 3; ++round) {
+        smooth_volume(v, o);
+        t += o.normal_steps * double(o.refit_dt);
+        const double expected = std::sqrt(r0_measured * r0_measured - 4.0 * t);
+        const double r = equivalent_radius(v);
+        std::printf("mcf: t %.1f r %.4f expected %.4f (%.2f%%)\n", t, r, expected, 100.0 * (r - expected) / expected);
+        EXPECT_NEAR(r, expected, 0.02 * expected) << "t = " << t;
+        EXPECT_LT(r, r0_measured);
+    }
+    // still a sphere, centred where it was
+    const RadialStats s = radial_stats(v, c);
+    EXPECT_LT(s.max_deviation, 0.2);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Energies
+
+TEST(SmoothVolume, NormalEnergyDecreasesInLoopAndRefitEnergyInRefit) {
+    for (const SmoothMode mode : {SmoothMode::Isotropic, SmoothMode::Anisotropic}) {
+        Volume v = make_volume(48, 1.0, sphere_sdf(Vec3d(24, 24, 24), 14.0));
+        add_noise(v, 0.3, 7u);
+        const SmoothReport rep = smooth_volume(v, options(mode, 3));
+        ASSERT_EQ(rep.normal_energy_steps.size(), 3u);
+        ASSERT_EQ(rep.refit_energy_steps.size(), 3u);
+        for (int it = 0; it < 3; ++it) {
+            const auto& g = rep.normal_energy_steps[std::size_t(it)];
+            ASSERT_EQ(g.size(), 26u);  // before each of 25 steps and after the last
+            EXPECT_LT(rep.normal_energy[std::size_t(it)], rep.normal_energy_start[std::size_t(it)]) << to_string(mode);
+            for (std::size_t s = 1; s < g.size(); ++s)
+                EXPECT_LE(g[s], g[s - 1] * (1.0 + 1e-6)) << to_string(mode) << " iteration " << it << " step " << s;
+            const auto& d = rep.refit_energy_steps[std::size_t(it)];
+            ASSERT_GE(d.size(), 2u);
+            EXPECT_LT(rep.refit_energy[std::size_t(it)], rep.refit_energy_start[std::size_t(it)]) << to_string(mode);
+            // D decreases at every refit step up to the one where the refit stopped, and the
+            // result is the iterate with the smallest D
+            for (std::size_t s = 1; s + 1 < d.size(); ++s)
+                EXPECT_LT(d[s], d[s - 1]) << to_string(mode) << " iteration " << it << " step " << s;
+            EXPECT_EQ(rep.refit_energy[std::size_t(it)], *std::min_element(d.begin(), d.end()));
+            EXPECT_GE(rep.refit_steps[std::size_t(it)], 1);
+            EXPECT_GT(rep.band_voxels[std::size_t(it)], 0u);
+            EXPECT_GE(rep.allocated_voxels[std::size_t(it)], rep.band_voxels[std::size_t(it)]);
+        }
+        if (mode == SmoothMode::Isotropic) {
+            // the first loop sees the noise: a large drop of G
+            EXPECT_LT(rep.normal_energy[0], 0.5 * rep.normal_energy_start[0]);
+        }
+    }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Features
+
+/// Mean angle (degrees) between the face normals of the extracted mesh and the true normal of the
+/// nearest box face, over triangles within `reach` voxels of an edge of the box (not near a corner),
+/// and over triangles on the flat parts.
+struct BoxNormalError {
+    double near_edges = 0, on_faces = 0;
+};
+BoxNormalError box_normal_error(const Mesh& m, const Vec3d& c, const Vec3d& e, double reach) {
+    double sum_e = 0, sum_f = 0, area_e = 0, area_f = 0;
+    for (const auto& t : m.triangles) {
+        const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), d(m.positions[t[2]]);
+        const Vec3d cr = cross(b - a, d - a);
+        const double area = 0.5 * norm(cr);
+        if (area <= 0) continue;
+        const Vec3d n = cr / (2 * area);
+        const Vec3d p = (a + b + d) / 3.0 - c;
+        double q[3];
+        int axis = 0;
+        for (int k = 0; k < 3; ++k) {
+            q[k] = std::abs(p[k]) - e[k];
+            if (q[k] > q[axis]) axis = k;
+        }
+        int near = 0;
+        for (int k = 0; k < 3; ++k) near += q[k] > -reach;
+        Vec3d truth(0, 0, 0);
+        truth[axis] = p[axis] < 0 ? -1.0 : 1.0;
+        const double ang = std::acos(std::clamp(dot(n, truth), -1.0, 1.0)) * 180.0 / kPi;
+        if (near == 2) {
+            sum_e += ang * area;
+            area_e += area;
+        } else if (near == 1) {
+            sum_f += ang * area;
+            area_f += area;
+        }
+    }
+    return {area_e > 0 ? sum_e / area_e : 180.0, area_f > 0 ? sum_f / area_f : 180.0};
+}
+
+TEST(SmoothVolume, AnisotropicKeepsNoisyCubeEdgesWhereIsotropicRoundsThem) {
+    const Vec3d c(24.4, 23.7, 24.2), e(13, 13, 13);
+    const Volume noisy = [&] {
+        Volume v = make_volume(48, 1.0, box_sdf(c, e));
+        add_noise(v, 0.25, 11u);
+        return v;
+    }();
+    const BoxNormalError err0 = box_normal_error(extract_surface(noisy), c, e, 2.5);
+    Volume iso = noisy, aniso = noisy;
+    smooth_volume(iso, options(SmoothMode::Isotropic, 3));
+    smooth_volume(aniso, options(SmoothMode::Anisotropic, 3));
+    const BoxNormalError ei = box_normal_error(extract_surface(iso), c, e, 2.5);
+    const BoxNormalError ea = box_normal_error(extract_surface(aniso), c, e, 2.5);
+    std::printf("cube normal error (deg) near edges / on faces: noisy %.2f / %.2f, isotropic %.2f / %.2f, "
+                "anisotropic %.2f / %.2f\n",
+                err0.near_edges, err0.on_faces, ei.near_edges, ei.on_faces, ea.near_edges, ea.on_faces);
+    // both remove the noise on the flat parts
+    EXPECT_LT(ei.on_faces, 0.5 * err0.on_faces);
+    EXPECT_LT(ea.on_faces, 0.5 * err0.on_faces);
+    // isotropic rounds the edges, anisotropic keeps them sharp
+    EXPECT_LT(ea.near_edges, 0.6 * ei.near_edges);
+    EXPECT_LT(ea.near_edges, err0.near_edges);
+}
+
+// ------------------------------------------------------------------------------------------------
+// High-boost
+
+/// Sphere with bumps: the zero set of |p − c| − r − a·sin(ωx)sin(ωy)sin(ωz) (not a distance; the
+/// engine reinitialises it).
+test::Sdf bumpy_sphere(const Vec3d& c, double r, double a, double w) {
+    return [=](const Vec3d& p) {
+        const Vec3d d = p - c;
+        return norm(d) - r - a * std::sin(w * d.x) * std::sin(w * d.y) * std::sin(w * d.z);
+    };
+}
+
+TEST(SmoothVolume, HighBoostRaisesTotalCurvatureOfBumpySurface) {
+    const Vec3d c(24.2, 23.9, 24.3);
+    Volume v = make_volume(48, 1.0, bumpy_sphere(c, 14.0, 1.0, 0.45));
+    smooth_volume(v, options(SmoothMode::Isotropic, 1));  // a distance function to start from
+    const double k0 = total_curvature(v);
+    Volume boosted = v, smoothed = v;
+    SmoothOptions o = options(SmoothMode::HighBoost, 2);
+    o.alpha = 1.0f;
+    smooth_volume(boosted, o);
+    smooth_volume(smoothed, options(SmoothMode::Isotropic, 2));
+    const double kb = total_curvature(boosted), ks = total_curvature(smoothed);
+    std::printf("total curvature: start %.2f highboost %.2f isotropic %.2f\n", k0, kb, ks);
+    EXPECT_GT(kb, 1.1 * k0);
+    EXPECT_LT(ks, k0);
+}
+
+TEST(SmoothVolume, HighBoostLeavesSphereASphere) {
+    const Vec3d c(24.3, 23.8, 24.1);
+    Volume v = make_volume(48, 1.0, sphere_sdf(c, 14.0));
+    const double r0 = equivalent_radius(v);
+    const RadialStats s0 = radial_stats(v, c);
+    SmoothOptions o = options(SmoothMode::HighBoost, 3);
+    smooth_volume(v, o);
+    const RadialStats s1 = radial_stats(v, c);
+    std::printf("highboost sphere: r0 %.4f r1 %.4f, max radial deviation %.4f -> %.4f\n", r0, equivalent_radius(v),
+                s0.max_deviation, s1.max_deviation);
+    EXPECT_LT(std::abs(equivalent_radius(v) - r0), 0.1);
+    EXPECT_LT(s1.max_deviation, 0.2);
+}
+
+// ------------------------------------------------------------------------------------------------
+// Independence of the triangulation and of the thread count
+
+/// A box with corners lo, hi, rotated about (1, 1, 1)/√3 by an angle, each face an n×n grid of
+/// quads split along alternating (alternate = true) or identical diagonals.
+Mesh rotated_box(const Vec3d& lo, const Vec3d& hi, int n, bool alternate, double angle) {
+    Mesh m;
+    const Vec3d ax = normalized(Vec3d(1, 1, 1));
+    const Vec3d ctr = (lo + hi) * 0.5;
+    auto rot = [&](const Vec3d& p) {  // Rodrigues
+        const Vec3d d = p - ctr;
+        const double cs = std::cos(angle), sn = std::sin(angle);
+        return ctr + d * cs + cross(ax, d) * sn + ax * (dot(ax, d) * (1 - cs));
+    };
+    for (int f = 0; f < 6; ++f) {
+        const int a = f / 2;            // normal axis
+        const bool pos = f % 2 == 1;
+        const int u = (a + 1) % 3, w = (a + 2) % 3;
+        const std::uint32_t base = std::uint32_t(m.positions.size());
+        for (int j = 0; j <= n; ++j)
+            for (int i = 0; i <= n; ++i) {
+                Vec3d p;
+                p[a] = pos ? hi[a] : lo[a];
+                p[u] = lo[u] + (hi[u] - lo[u]) * i / n;
+                p[w] = lo[w] + (hi[w] - lo[w]) * j / n;
+                m.positions.push_back(Vec3f(rot(p)));
+            }
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const std::uint32_t v00 = base + std::uint32_t(j * (n + 1) + i), v10 = v00 + 1,
+                                    v01 = v00 + std::uint32_t(n + 1), v11 = v01 + 1;
+                // (u, w, a) is right-handed: counter-clockwise in (u, w) faces +a
+                auto tri = [&](std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+                    m.triangles.push_back(pos ? Tri{x, y, z} : Tri{x, z, y});
+                };
+                if (alternate && (i + j) % 2 == 1) {
+                    tri(v00, v10, v01);
+                    tri(v10, v11, v01);
+                } else {
+                    tri(v00, v10, v11);
+                    tri(v00, v11, v01);
+                }
+            }
+    }
+    return m;
+}
+
+TEST(SmoothVolume, SameShapeTriangulatedTwoWaysGivesTheSameResult) {
+    const Vec3d lo(0, 0, 0), hi(1.0, 0.8, 0.6);
+    const Mesh a = rotated_box(lo, hi, 1, false, 0.4);
+    const Mesh b = rotated_box(lo, hi, 5, true, 0.4);
+    ScanConvertOptions so;
+    so.resolution = 40;
+    so.half_width = 3.0f;
+    Volume va = scan_convert(a, *make_bvh_query(a), so);
+    Volume vb = scan_convert(b, *make_bvh_query(b), so);
+    ASSERT_EQ(va.grid.dims, vb.grid.dims);
+    for (const SmoothMode mode : {SmoothMode::Isotropic, SmoothMode::Anisotropic}) {
+        Volume ra = va, rb = vb;
+        smooth_volume(ra, options(mode, 3));
+        smooth_volume(rb, options(mode, 3));
+        const double h = ra.grid.voxel_size;
+        double worst = 0.0;
+        std::size_t near = 0;
+        for (int k = 0; k < ra.grid.dims[2]; ++k)
+            for (int j = 0; j < ra.grid.dims[1]; ++j)
+                for (int i = 0; i < ra.grid.dims[0]; ++i) {
+                    const double pa = ra.value(i, j, k) / h, pb = rb.value(i, j, k) / h;
+                    if (std::min(std::abs(pa), std::abs(pb)) > 2.0) continue;
+                    ++near;
+                    worst = std::max(worst, std::abs(pa - pb));
+                }
+        std::printf("%s: two triangulations differ by at most %.4g voxel near the surface\n", to_string(mode), worst);
+        EXPECT_GT(near, 1000u);
+        EXPECT_LT(worst, 0.25) << to_string(mode);
+    }
+}
+
+TEST(SmoothVolume, BitIdenticalWithOneAndTwoThreads) {
+    for (const SmoothMode mode :
+         {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature}) {
+        Volume v = make_volume(40, 1.0, box_sdf(Vec3d(20.3, 19.6, 20.2), Vec3d(11, 9, 10)));
+        add_noise(v, 0.3, 3u);
+        Volume v1 = v, v2 = v;
+        SmoothOptions o = options(mode, 2);
+        o.second_order_term = mode == SmoothMode::Isotropic;
+        o.threads = 1;
+        const SmoothReport r1 = smooth_volume(v1, o);
+        o.threads = 2;
+        const SmoothReport r2 = smooth_volume(v2, o);
+        ASSERT_EQ(v1.block_coords, v2.block_coords) << to_string(mode);
+        ASSERT_EQ(v1.block_table, v2.block_table) << to_string(mode);
+        ASSERT_EQ(v1.values.size(), v2.values.size());
+        EXPECT_EQ(0, std::memcmp(v1.values.data(), v2.values.data(), v1.values.size() * sizeof(float)))
+            << to_string(mode);
+        EXPECT_EQ(r1.normal_energy, r2.normal_energy) << to_string(mode);
+        EXPECT_EQ(r1.refit_energy, r2.refit_energy) << to_string(mode);
+        EXPECT_EQ(r1.band_voxels, r2.band_voxels) << to_string(mode);
+    }
+}
+
+// ------------------------------------------------------------------------------------------------
+// Real data (skipped without shared/data)
+
+TEST(SmoothVolume, RealNoisyFandiskGetsCloserToTheGroundTruth) {
+    const std::filesystem::path dir = std::filesystem::path(NORMALFLOW_TEST_DATA) / "pairs_gnf";
+    if (!std::filesystem::exists(dir / "fandisk_n0.3.ply")) GTEST_SKIP() << "no " << dir;
+    const Mesh noisy = read_mesh((dir / "fandisk_n0.3.ply").string());
+    const Mesh truth = read_mesh((dir / "fandisk_gt.ply").string());
+    ScanConvertOptions so;
+    so.resolution = 64;
+    const Volume v0 = scan_convert(noisy, *make_bvh_query(noisy), so);
+    SurfaceSamplingOptions ss;
+    ss.samples = 20000;
+    const SurfaceDistance d0 = surface_distance(extract_surface(v0), truth, ss);
+    Volume iso = v0, aniso = v0;
+    smooth_volume(iso, options(SmoothMode::Isotropic, 3));
+    smooth_volume(aniso, options(SmoothMode::Anisotropic, 3));
+    const SurfaceDistance di = surface_distance(extract_surface(iso), truth, ss);
+    const SurfaceDistance da = surface_distance(extract_surface(aniso), truth, ss);
+    std::printf("fandisk_n0.3 at 64: normal error (deg) voxelised noisy %.2f, isotropic %.2f, anisotropic %.2f\n",
+                d0.mean_normal_angle_deg, di.mean_normal_angle_deg, da.mean_normal_angle_deg);
+    EXPECT_LT(di.mean_normal_angle_deg, d0.mean_normal_angle_deg);
+    EXPECT_LT(da.mean_normal_angle_deg, d0.mean_normal_angle_deg);
+    EXPECT_LT(da.mean, 0.5 * v0.grid.voxel_size);  // no drift
+}
+
+// ------------------------------------------------------------------------------------------------
+// Band, cancellation, bad input
+
+TEST(SmoothVolume, BandFollowsTheSurfaceAndKeepsTheInvariant) {
+    // MCF shrinks the sphere by several voxels: the band must move with it and stay consistent.
+    const Vec3d c(24, 24, 24);
+    Volume v = make_volume(48, 1.0, sphere_sdf(c, 15.0));
+    SmoothOptions o = options(SmoothMode::MeanCurvature, 4);
+    o.normal_steps = 41;  // odd: the step buffers must agree outside the active blocks
+    smooth_volume(v, o);
+    EXPECT_FLOAT_EQ(v.half_width, 8.0f);
+    // no sample far inside the shrunken sphere (r ≈ sqrt(225 − 4·16.4) ≈ 12.6) is positive
+    for (int k = 0; k < 48; ++k)
+        for (int j = 0; j < 48; ++j)
+            for (int i = 0; i < 48; ++i)
+                if (norm(Vec3d(i, j, k) - c) < 9.0) {
+                    ASSERT_LT(v.value(i, j, k), 0.0f) << i << " " << j << " " << k;
+                }
+    for (std::size_t b = 0; b < v.block_count(); ++b) {
+        const auto& bc = v.block_coords[b];
+        EXPECT_EQ(v.block_table[v.table_index(bc[0], bc[1], bc[2])], std::int32_t(b));
+    }
+    // tiles carry the right sign: centre inside, corners outside
+    EXPECT_LT(v.value(24, 24, 24), 0.0f);
+    EXPECT_GT(v.value(1, 1, 1), 0.0f);
+    // φ is a signed distance near the surface: |∇φ| ≈ 1 on the samples within 3 voxels
+    double worst = 0;
+    for (int k = 4; k < 44; ++k)
+        for (int j = 4; j < 44; ++j)
+            for (int i = 4; i < 44; ++i) {
+                if (std::abs(v.value(i, j, k)) > 3.0f) continue;
+                const double gx = 0.5 * (v.value(i + 1, j, k) - v.value(i - 1, j, k));
+                const double gy = 0.5 * (v.value(i, j + 1, k) - v.value(i, j - 1, k));
+                const double gz = 0.5 * (v.value(i, j, k + 1) - v.value(i, j, k - 1));
+                worst = std::max(worst, std::abs(std::sqrt(gx * gx + gy * gy + gz * gz) - 1.0));
+            }
+    EXPECT_LT(worst, 0.15);
+}
+
+class StopAfter : public Progress {
+public:
+    explicit StopAfter(int n) : n_(n) {}
+    void progress(double f) override {
+        ++calls;
+        EXPECT_GE(f, last);
+        EXPECT_LE(f, 1.0);
+        last = f;
+    }
+    bool should_stop() override {
+        ++asks;
+        return asks > n_;
+    }
+    int calls = 0, asks = 0;
+    double last = 0;
+
+private:
+    int n_;
+};
+
+TEST(SmoothVolume, CancelStopsPromptlyAndThrowsCancelled) {
+    Volume v = make_volume(48, 1.0, sphere_sdf(Vec3d(24, 24, 24), 14.0));
+    StopAfter p(3);
+    EXPECT_THROW(smooth_volume(v, options(SmoothMode::Anisotropic, 50), &p), Cancelled);
+    EXPECT_EQ(p.asks, 4);  // no more work once it asked to stop
+    StopAfter never(1 << 30);
+    Volume w = make_volume(32, 1.0, sphere_sdf(Vec3d(16, 16, 16), 9.0));
+    smooth_volume(w, options(SmoothMode::Isotropic, 2), &never);
+    EXPECT_GT(never.calls, 50);
+    EXPECT_DOUBLE_EQ(never.last, 1.0);
+}
+
+TEST(SmoothVolume, NaNInInputIsAClearError) {
+    Volume v = make_volume(32, 1.0, sphere_sdf(Vec3d(16, 16, 16), 9.0));
+    v.values[100] = std::numeric_limits<float>::quiet_NaN();
+    try {
+        smooth_volume(v);
+        FAIL() << "no exception";
+    } catch (const NumericalError& e) {
+        EXPECT_NE(std::string(e.what()).find("NaN"), std::string::npos) << e.what();
+    }
+}
+
+TEST(SmoothVolume, OptionsOutOfRangeThrowInvalidInput) {
+    const Volume v0 = make_volume(32, 1.0, sphere_sdf(Vec3d(16, 16, 16), 9.0));
+    auto expect_bad = [&](auto&& set, const char* field) {
+        SmoothOptions o;
+        set(o);
+        Volume v = v0;
+        try {
+            smooth_volume(v, o);
+            ADD_FAILURE() << field << ": no exception";
+        } catch (const InvalidInput& e) {
+            EXPECT_NE(std::string(e.what()).find(field), std::string::npos) << e.what();
+        }
+        EXPECT_EQ(v.values, v0.values) << field << ": volume changed";
+    };
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    expect_bad([](SmoothOptions& o) { o.iterations = 0; }, "iterations");
+    expect_bad([](SmoothOptions& o) { o.normal_steps = 0; }, "normal_steps");
+    expect_bad([](SmoothOptions& o) { o.mu = 0.0f; }, "mu");
+    expect_bad([&](SmoothOptions& o) { o.mu = nan; }, "mu");
+    expect_bad([](SmoothOptions& o) { o.alpha = -1.0f; }, "alpha");
+    expect_bad([](SmoothOptions& o) { o.normal_dt = 0.0f; }, "normal_dt");
+    expect_bad([](SmoothOptions& o) { o.refit_dt = -0.1f; }, "refit_dt");
+    expect_bad([](SmoothOptions& o) { o.refit_max_steps = 0; }, "refit_max_steps");
+    expect_bad([](SmoothOptions& o) { o.refit_tolerance = -1.0; }, "refit_tolerance");
+    expect_bad([](SmoothOptions& o) { o.conductance_presmooth_steps = -1; }, "conductance_presmooth_steps");
+    expect_bad([](SmoothOptions& o) { o.active_band = 1.0f; }, "active_band");
+    expect_bad([](SmoothOptions& o) { o.active_band = 6.0f; }, "active_band");
+    expect_bad([](SmoothOptions& o) { o.threads = -1; }, "threads");
+    // a volume whose arrays disagree
+    Volume broken = v0;
+    broken.values.pop_back();
+    EXPECT_THROW(smooth_volume(broken), InvalidInput);
+}
+
+TEST(SmoothVolume, LargeTimeStepsAreClampedWithAWarning) {
+    Volume v = make_volume(32, 1.0, sphere_sdf(Vec3d(16, 16, 16), 9.0));
+    const double r0 = equivalent_radius(v);
+    SmoothOptions o = options(SmoothMode::Isotropic, 1);
+    o.normal_dt = 1.0f;
+    o.refit_dt = 1.0f;
+    const SmoothReport rep = smooth_volume(v, o);
+    EXPECT_EQ(rep.warnings.size(), 2u);
+    EXPECT_LT(std::abs(equivalent_radius(v) - r0), 0.05);  // stable
+}
+
+TEST(SmoothVolume, VolumeWithoutSurfaceIsReturnedUnchanged) {
+    Grid g;
+    g.dims = {16, 16, 16};
+    Volume v(g, 3.0f);
+    v.allocate_block(0, 0, 0);
+    const Volume before = v;
+    const SmoothReport rep = smooth_volume(v);
+    EXPECT_EQ(rep.iterations, 0);
+    EXPECT_FALSE(rep.warnings.empty());
+    EXPECT_EQ(v.values, before.values);
+}
+
+}  // namespace
+}  // namespace normalflow

@@ -1,0 +1,205 @@
+// Output for real users: cleanup, Draco/glTF files checked by tools nobody here wrote, TetGen.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "../sdf/sdf_test_meshes.h"
+#include "core/errors.h"
+#include "core/mesh_report.h"
+#include "io/cgal/cleanup.h"
+#include "io/draco/draco_io.h"
+#include "io/formats/gltf.h"
+#include "io/io.h"
+#include "io/tetgen/tetmesh.h"
+
+namespace fs = std::filesystem;
+using namespace normalflow;
+using normalflow::test::icosphere;  // NOLINT
+
+namespace {
+
+fs::path tmp_dir() {
+    fs::path d = fs::path(NORMALFLOW_BINARY_DIR) / "tests_output_tmp";
+    fs::create_directories(d);
+    return d;
+}
+
+int sh(const std::string& cmd) { return std::system((cmd + " > /dev/null 2>&1").c_str()); }
+
+}  // namespace
+
+TEST(Cleanup, FaceCountKeepsClosedManifoldAndReportsDistance) {
+    Mesh m = icosphere(1.0, 5);  // 20480 faces
+    cgal::CleanupOptions o;
+    o.reduction = cgal::CleanupReduction::FaceCount;
+    o.target_faces = 2000;
+    const auto r = cgal::cleanup_mesh(m, o);
+    EXPECT_EQ(r.faces_before, 20480u);
+    EXPECT_LE(r.faces_after, 2000u);
+    EXPECT_GE(r.faces_after, 1800u);
+    EXPECT_TRUE(r.closed);
+    EXPECT_TRUE(r.manifold);
+    EXPECT_EQ(r.self_intersections, 0u);
+    EXPECT_GT(r.hausdorff, 0.0);
+    EXPECT_LT(r.hausdorff, 0.02);  // 2000 faces on a unit sphere: chord error ~ 0.005
+    const MeshReport mr = mesh_report(m);
+    EXPECT_GT(mr.volume, 4.0);  // outward, close to 4/3 pi = 4.19
+}
+
+TEST(Cleanup, ErrorBoundStaysWithinBound) {
+    Mesh m = icosphere(1.0, 4);
+    const Mesh in = m;
+    cgal::CleanupOptions o;
+    o.reduction = cgal::CleanupReduction::ErrorBound;
+    o.max_error = 0.005;
+    const auto r = cgal::cleanup_mesh(m, o);
+    EXPECT_LT(r.faces_after, r.faces_before / 2);
+    EXPECT_TRUE(r.closed);
+    EXPECT_TRUE(r.manifold);
+    // The envelope bounds result -> input; measure it independently with more samples.
+    const auto d = cgal::sampled_hausdorff(m, in, 7);
+    EXPECT_LE(d.a_to_b, o.max_error * 1.0001);
+    EXPECT_LE(r.result_to_input, o.max_error * 1.0001);
+}
+
+TEST(Cleanup, DropsSmallComponentsAndOrientsOutward) {
+    Mesh big = icosphere(1.0, 3);
+    Mesh small = test::flipped(icosphere(0.1, 1, {5, 0, 0}));
+    Mesh m = test::concat(test::flipped(big), small);
+    cgal::CleanupOptions o;
+    o.min_component_fraction = 0.1;
+    const auto r = cgal::cleanup_mesh(m, o);
+    EXPECT_EQ(r.components_removed, 1u);
+    EXPECT_EQ(r.components_reversed, 1u);
+    EXPECT_EQ(m.triangles.size(), big.triangles.size());
+    EXPECT_GT(mesh_report(m).volume, 4.0);
+}
+
+TEST(Cleanup, BadOptionsThrow) {
+    Mesh m = icosphere(1.0, 1);
+    cgal::CleanupOptions o;
+    o.reduction = cgal::CleanupReduction::ErrorBound;
+    EXPECT_THROW(cgal::cleanup_mesh(m, o), InvalidInput);
+}
+
+TEST(Draco, RoundTripWithinQuantizationBound) {
+    const Mesh m = icosphere(1.0, 4);
+    for (int bits : {8, 11, 14}) {
+        DracoOptions o;
+        o.position_bits = bits;
+        const auto p = tmp_dir() / ("rt" + std::to_string(bits) + ".drc");
+        write_drc(p.string(), m, o);
+        const Mesh back = read_drc(p.string());
+        ASSERT_EQ(back.triangles.size(), m.triangles.size());
+        ASSERT_EQ(back.positions.size(), m.positions.size());
+        const double bound = 2.0 / (std::pow(2.0, bits) - 1) / 2 * 1.0001 + 1e-6;  // bbox extent 2
+        // Every decoded point is within the bound of some input point (Draco may reorder points).
+        for (const auto& x : back.positions) {
+            double best = 1e9;
+            for (const auto& y : m.positions) {
+                double d = 0;
+                for (int k = 0; k < 3; ++k) d = std::max(d, std::abs(double(x[k]) - double(y[k])));
+                best = std::min(best, d);
+            }
+            ASSERT_LE(best, bound) << bits << " bits";
+        }
+    }
+}
+
+TEST(Draco, DecoderReadsEveryDrcWeWrite) {
+    if (sh("command -v draco_decoder") != 0) GTEST_SKIP() << "draco_decoder not installed (Debian package draco)";
+    const auto p = tmp_dir() / "dec.drc";
+    const auto out = tmp_dir() / "dec.ply";
+    for (int bits : {10, 14}) {
+        DracoOptions o;
+        o.position_bits = bits;
+        write_drc(p.string(), icosphere(1.0, 3), o);
+        fs::remove(out);
+        EXPECT_EQ(sh("draco_decoder -i " + p.string() + " -o " + out.string()), 0);
+        ASSERT_TRUE(fs::exists(out));
+        EXPECT_EQ(read_mesh(out.string()).triangles.size(), 1280u);
+    }
+}
+
+TEST(Gltf, ValidatorReportsNoErrorOnEveryGlb) {
+    const fs::path modules = fs::path(NORMALFLOW_BINARY_DIR) / "tools" / "node_modules";
+    if (sh("command -v node") != 0 || !fs::exists(modules / "gltf-validator"))
+        GTEST_SKIP() << "node or gltf-validator missing: npm install --prefix " NORMALFLOW_BINARY_DIR "/tools gltf-validator";
+    const Mesh m = icosphere(1.0, 3);
+    const auto a = tmp_dir() / "plain.glb", b = tmp_dir() / "draco.glb", c = tmp_dir() / "fallback.glb";
+    write_glb(a.string(), m);
+    write_draco_glb(b.string(), m);
+    DracoOptions fb;
+    fb.fallback = true;
+    write_draco_glb(c.string(), m, fb);
+    EXPECT_EQ(sh("node " NORMALFLOW_SOURCE_DIR "/tests/output/validate_glb.js " + modules.string() + " " + a.string() +
+                 " " + b.string() + " " + c.string()),
+              0);
+    EXPECT_EQ(read_gltf(b.string()).triangles.size(), 1280u);
+}
+
+TEST(Tetmesh, SphereAndCubeVolume) {
+    TetmeshReport r;
+    const TetMesh t = tetrahedralize(icosphere(1.0, 3), {}, &r);
+    EXPECT_EQ(r.tetrahedra, t.tets.size());
+    EXPECT_GT(r.tetrahedra, 100u);
+    EXPECT_NEAR(r.volume, r.surface_volume, 0.01 * r.surface_volume);
+    EXPECT_GT(r.min_dihedral_deg, 0.0);
+    TetmeshReport rc;
+    TetmeshOptions o;
+    o.max_volume = 0.01;
+    tetrahedralize(test::box_mesh({0, 0, 0}, {1, 1, 1}), o, &rc);
+    EXPECT_NEAR(rc.volume, 1.0, 1e-6);
+    EXPECT_GE(rc.tetrahedra, 100u);
+}
+
+TEST(Tetmesh, RefusesOpenAndSelfIntersectingSurfaces) {
+    Mesh open = icosphere(1.0, 2);
+    open.triangles.pop_back();
+    EXPECT_THROW(tetrahedralize(open), InvalidInput);
+    const Mesh two = test::concat(test::box_mesh({0, 0, 0}, {1, 1, 1}), test::box_mesh({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}));
+    EXPECT_THROW(tetrahedralize(two), InvalidInput);
+    EXPECT_THROW(tetrahedralize(Mesh{}), InvalidInput);
+}
+
+TEST(Tetmesh, MeshioReadsVtuAndMesh) {
+    // Debian's python3-meshio lives in the system python (a pyenv python3 first on PATH lacks it).
+    const std::string py = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+    if (sh(py + " -c 'import meshio'") != 0) GTEST_SKIP() << "python3 cannot import meshio (apt-get install python3-meshio)";
+    const TetMesh t = tetrahedralize(icosphere(1.0, 2));
+    const auto vtu = tmp_dir() / "t.vtu", me = tmp_dir() / "t.mesh", nd = tmp_dir() / "t.node";
+    write_tetmesh(vtu.string(), t);
+    write_tetmesh(me.string(), t);
+    write_tetmesh(nd.string(), t);
+    EXPECT_TRUE(fs::exists(tmp_dir() / "t.ele"));
+    for (const auto& p : {vtu, me}) {
+        const std::string cmd = py + " -c \"import meshio,sys; m=meshio.read('" + p.string() +
+                                "'); c=m.cells_dict['tetra']; sys.exit(0 if len(m.points)==" +
+                                std::to_string(t.points.size()) + " and len(c)==" + std::to_string(t.tets.size()) +
+                                " else 1)\"";
+        EXPECT_EQ(sh(cmd), 0) << p;
+    }
+    EXPECT_THROW(write_tetmesh((tmp_dir() / "t.xyz").string(), t), InvalidInput);
+}
+
+TEST(Output, NormalflowSurfaceFromRealModel) {
+    const fs::path f = fs::path(NORMALFLOW_TEST_DATA) / "pairs_gnf" / "fandisk_gt.ply";
+    if (!fs::exists(f)) GTEST_SKIP() << "shared/data missing";
+    Mesh m = read_mesh(f.string());
+    cgal::CleanupOptions o;
+    o.reduction = cgal::CleanupReduction::FaceCount;
+    o.target_faces = 4000;
+    const auto r = cgal::cleanup_mesh(m, o);
+    EXPECT_LE(r.faces_after, 4000u);
+    EXPECT_TRUE(r.closed && r.manifold) << (r.warnings.empty() ? "" : r.warnings[0]);
+    if (r.closed && r.manifold && r.self_intersections == 0) {
+        TetmeshReport tr;
+        tetrahedralize(m, {}, &tr);
+        EXPECT_NEAR(tr.volume, tr.surface_volume, 0.01 * tr.surface_volume);
+    }
+}
