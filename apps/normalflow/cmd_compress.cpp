@@ -51,18 +51,22 @@ int run_compress(const CompressArgs& a) {
 
 }  // namespace
 
+void add_draco_options(CLI::App* cmd, DracoOptions& d) {
+    cmd->add_option("--position-bits", d.position_bits, "quantization bits per position axis")
+        ->check(CLI::Range(1, 30))->capture_default_str();
+    cmd->add_option("--normal-bits", d.normal_bits, "quantization bits per normal component")
+        ->check(CLI::Range(1, 30))->capture_default_str();
+    cmd->add_option("--level", d.compression_level, "compression level 0 (fast) .. 10 (small)")
+        ->check(CLI::Range(0, 10))->capture_default_str();
+    cmd->add_flag("--fallback", d.fallback, ".glb: also store uncompressed buffers for viewers without Draco");
+}
+
 void add_compress_command(CLI::App& app) {
     auto a = std::make_shared<CompressArgs>();
     auto* cmd = app.add_subcommand("compress", "write a mesh as Draco (.drc) or Draco-compressed glTF (.glb)");
     cmd->add_option("IN", a->input, "mesh file")->required();
     cmd->add_option("OUT", a->output, "output .drc or .glb")->required();
-    cmd->add_option("--position-bits", a->draco.position_bits, "quantization bits per position axis")
-        ->check(CLI::Range(1, 30))->capture_default_str();
-    cmd->add_option("--normal-bits", a->draco.normal_bits, "quantization bits per normal component")
-        ->check(CLI::Range(1, 30))->capture_default_str();
-    cmd->add_option("--level", a->draco.compression_level, "compression level 0 (fast) .. 10 (small)")
-        ->check(CLI::Range(0, 10))->capture_default_str();
-    cmd->add_flag("--fallback", a->draco.fallback, ".glb: also store uncompressed buffers for viewers without Draco");
+    add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_compress);
 }

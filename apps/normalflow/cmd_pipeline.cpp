@@ -14,6 +14,7 @@
 #include "sdf/scan_convert.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/aabb_distance.h"
+#include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #endif
 
@@ -55,6 +56,8 @@ struct SmoothArgs {
     float alpha = SmoothOptions{}.alpha;              ///< high-boost amount
     int presmooth = -1;                ///< conductance pre-smoothing steps (-1: library default)
     bool second_order = false;         ///< Appendix A's second term in the refit
+    std::size_t target_faces = 0;      ///< > 0: decimate the extracted mesh (CGAL edge collapse)
+    DracoOptions draco;                ///< quantization and level for .drc / .glb outputs
     OutputFlags out;
 };
 
@@ -163,10 +166,15 @@ Mesh volume_to_mesh(const Volume& v, TerminalProgress& progress, Json& j, const 
     return m;
 }
 
-void write_result(const std::string& output, const Mesh& m, TerminalProgress& progress, Json& j) {
+void write_result(const std::string& output, const Mesh& m, TerminalProgress& progress, Json& j,
+                  const DracoOptions& draco = {}) {
     Stopwatch clock;
     progress.begin("write");
-    write_mesh(output, m);
+    switch (mesh_format_from_path(output)) {
+        case MeshFormat::Drc: write_drc(output, m, draco); break;
+        case MeshFormat::Glb: write_draco_glb(output, m, draco); break;  // KHR_draco_mesh_compression
+        default: write_mesh(output, m);
+    }
     const MeshReport r = mesh_report(m);
     Json out = Json::object();
     out.set("file", output).set("vertices", m.positions.size()).set("triangles", m.triangles.size())
@@ -253,8 +261,25 @@ int run_smooth(const SmoothArgs& a) {
         .set("refit_energy", Json::array(sr.refit_energy));
     j.set("smooth", s);
     for (const auto& w : sr.warnings) j["warnings"].push(w);
-    const Mesh m = volume_to_mesh(v, progress, j, a.input, true);
-    write_result(a.output, m, progress, j);
+    Mesh m = volume_to_mesh(v, progress, j, a.input, true);
+    if (a.target_faces > 0) {
+#ifdef NORMALFLOW_HAS_CGAL
+        progress.begin("decimate");
+        cgal::CleanupOptions co;
+        co.reduction = cgal::CleanupReduction::FaceCount;
+        co.target_faces = a.target_faces;
+        const cgal::CleanupReport cr = cgal::cleanup_mesh(m, co);
+        j.set("decimate", Json::object()
+                              .set("faces_before", cr.faces_before)
+                              .set("faces_after", cr.faces_after)
+                              .set("hausdorff", cr.hausdorff)
+                              .set("seconds", cr.seconds));
+        for (const auto& w : cr.warnings) j["warnings"].push(w);
+#else
+        throw InvalidInput("smooth: --target-faces needs a build with CGAL");
+#endif
+    }
+    write_result(a.output, m, progress, j, a.draco);
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles, " +
                   std::to_string(int(total.seconds() * 10) / 10.0).substr(0, 5) + " s)");
@@ -299,6 +324,9 @@ void add_smooth_command(CLI::App& app) {
                     "anisotropic: isotropic steps that regularise the conductance (0: the paper's raw g)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_flag("--second-order", a->second_order, "add Appendix A's second term (Eq. 39) to the refit");
+    cmd->add_option("--target-faces", a->target_faces, "decimate the result to at most N faces (CGAL edge collapse)")
+        ->check(CLI::Range(std::size_t(4), std::size_t(1) << 40));
+    add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_smooth);
 }

@@ -4,6 +4,7 @@
 // Each lives in its own cmd_*.cpp; adding a command is one line here, one in main.cpp and one in
 // CMakeLists.txt.
 #include "cli_support.h"
+#include "io/draco/draco_io.h"
 
 namespace normalflow::cli {
 
@@ -20,5 +21,8 @@ void add_compare_command(CLI::App& app);    // cmd_compare.cpp
 void add_compress_command(CLI::App& app);  // cmd_compress.cpp
 void add_cleanup_command(CLI::App& app);   // cmd_cleanup.cpp
 void add_tetmesh_command(CLI::App& app);   // cmd_tetmesh.cpp
+
+/// --position-bits, --normal-bits, --level, --fallback (compress and smooth share them).
+void add_draco_options(CLI::App* cmd, DracoOptions& d);  // cmd_compress.cpp
 
 }  // namespace normalflow::cli

@@ -5,6 +5,7 @@
   reliability.py NORMALFLOW sigint EXAMPLE       Ctrl-C stops a long run promptly, exit 130, no file left
   reliability.py NORMALFLOW memory EXAMPLE       --max-memory refuses before allocating, exit 6, no file
   reliability.py NORMALFLOW scale                the same shape at 1e-4 and 1e5 units gives the same result
+  reliability.py NORMALFLOW web EXAMPLE          smooth straight to a decimated Draco .glb
 
 Each run must end in one of two ways: exit 0 with a closed manifold mesh, or a non-zero exit with
 one line on stderr that names the input or output file, and no output file. A signal (crash) or
@@ -200,6 +201,26 @@ def scale(nf):
             fail(f"scale {s:g}: result differs from scale 1 by {err:.3g} (relative)")
 
 
+def web(nf, example):
+    """smooth straight to a decimated, Draco-compressed .glb: the file reads back closed with <= N faces."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "part.glb")
+        p, _ = run([nf, "smooth", example, out, "--resolution", "48", "--iterations", "1", "--target-faces", "3000",
+                    "--position-bits", "12", "--json"])
+        if p.returncode != 0:
+            fail(f"web: status {p.returncode}: {p.stderr.strip()}")
+            return
+        j = json.loads(p.stdout.strip().splitlines()[-1])
+        q, _ = run([nf, "info", out, "--json"])
+        info = json.loads(q.stdout.strip().splitlines()[-1])
+        print(f"web: {j['decimate']['faces_before']} -> {info['triangles']} faces, {os.path.getsize(out)} bytes, "
+              f"closed={info['closed']}")
+        if info["triangles"] > 3000 or not info["closed"] or info["components"] != 1:
+            fail(f"web: the .glb holds {info['triangles']} faces, closed={info['closed']}")
+        if j["decimate"]["hausdorff"] <= 0 or j["output"]["triangles"] != info["triangles"]:
+            fail(f"web: report and file disagree: {j['decimate']} vs {info['triangles']}")
+
+
 def main():
     nf, what = sys.argv[1], sys.argv[2]
     if what == "dirty":
@@ -210,6 +231,8 @@ def main():
         memory(nf, sys.argv[3])
     elif what == "scale":
         scale(nf)
+    elif what == "web":
+        web(nf, sys.argv[3])
     else:
         sys.exit(f"unknown check {what}")
     if failures:
