@@ -240,6 +240,12 @@ private:
                           });
     }
 
+    /// Honours a stop request between passes of work that reports no progress of its own
+    /// (reinitialisation sweeps, conductance pre-smoothing), so cancelling stays prompt.
+    void poll() const {
+        if (progress_ && progress_->should_stop()) throw Cancelled("smooth_volume: cancelled");
+    }
+
     void tick(double frac_in_iteration) {
         const double f = (iteration_ + std::clamp(frac_in_iteration, 0.0, 1.0)) / opt_.iterations;
         detail::tick(progress_, f, "smooth_volume");
@@ -383,6 +389,7 @@ private:
         std::vector<std::uint8_t> changed(nb);
         const int max_passes = int(kHalfWidth * 3);
         for (int pass = 0; pass < max_passes; ++pass) {
+            poll();
             for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
                 Neighbourhood n;
                 neighbourhood(std::size_t(b), n);
@@ -619,6 +626,7 @@ private:
                 copy_fields(n_, aux_);
                 copy_fields(n_, n2_);
                 for (int s = 0; s < opt_.conductance_presmooth_steps; ++s) {
+                    poll();
                     normal_step(aux_, n2_, Conductance::One, true);
                     std::swap(aux_, n2_);
                 }

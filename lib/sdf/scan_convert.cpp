@@ -296,7 +296,7 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
 
     // 2. Distances and signs per candidate block, in chunks (bounded scratch memory).
     const Context ctx{grid, q, wn.get(), h, reach, shell_off, bg};
-    constexpr std::size_t kChunk = 4096;
+    constexpr std::size_t kChunk = 512;  // also the cancel granularity: ~0.1 s of work per chunk
     std::vector<float> scratch;
     std::vector<BlockStats> stats;
     bool any_inside = false;
