@@ -1,5 +1,7 @@
 #include "io/formats/format_util.h"
 
+#include "io/formats/atomic_file.h"
+
 #include <cerrno>
 #include <cstdio>
 #include <filesystem>
@@ -59,6 +61,37 @@ void validate_mesh_for_write(const Mesh& m, std::string_view who, std::string_vi
 std::string split_warning(std::size_t n) {
     return std::to_string(n) + (n == 1 ? " face had" : " faces had") +
            " more than 3 corners (split into triangle fans)";
+}
+
+void write_ascii_vertices_and_faces(AtomicFile& f, std::string& buf, const Mesh& m) {
+    constexpr std::size_t kChunk = 1 << 20;
+    buf.reserve(kChunk + 256);
+    const auto flush = [&] {
+        if (buf.size() >= kChunk) {
+            f.write(buf);
+            buf.clear();
+        }
+    };
+    for (const Vec3f& v : m.positions) {
+        append_float(buf, v.x);
+        buf += ' ';
+        append_float(buf, v.y);
+        buf += ' ';
+        append_float(buf, v.z);
+        buf += '\n';
+        flush();
+    }
+    for (const Tri& t : m.triangles) {
+        buf += '3';
+        for (const std::uint32_t i : t) {
+            buf += ' ';
+            append_uint(buf, i);
+        }
+        buf += '\n';
+        flush();
+    }
+    f.write(buf);
+    buf.clear();
 }
 
 }  // namespace normalflow::detail

@@ -17,6 +17,8 @@
 #include "core/errors.h"
 #include "core/mesh.h"
 
+namespace normalflow { class AtomicFile; }
+
 namespace normalflow::detail {
 
 /// Reads the whole file at `path` into memory.
@@ -34,6 +36,10 @@ void validate_mesh_for_write(const Mesh& m, std::string_view who, std::string_vi
 
 /// "N faces had more than 3 corners (split into triangle fans)".
 std::string split_warning(std::size_t n);
+
+/// Writes the body that ASCII PLY and OFF share, "x y z" per vertex then "3 i j k" per face, to f
+/// in chunks of about 1 MiB. buf holds what comes before it (the header) and is left empty.
+void write_ascii_vertices_and_faces(AtomicFile& f, std::string& buf, const Mesh& m);
 
 /// Appends the shortest decimal text that reads back to exactly v (std::to_chars round trip).
 inline void append_float(std::string& out, float v) {

@@ -188,39 +188,12 @@ Mesh read_off(const std::string& path, ReadInfo* info) {
 void write_off(const std::string& path, const Mesh& m, const WriteOptions&) {
     detail::validate_mesh_for_write(m, kWriter, path);
     AtomicFile f(path, kWriter);
-    constexpr std::size_t kChunk = 1 << 20;
-    std::string buf;
-    buf.reserve(kChunk + 256);
-    buf += "OFF\n# written by normalflow\n";
+    std::string buf = "OFF\n# written by normalflow\n";
     detail::append_uint(buf, m.positions.size());
     buf += ' ';
     detail::append_uint(buf, m.triangles.size());
     buf += " 0\n";
-    auto flush = [&] {
-        if (buf.size() >= kChunk) {
-            f.write(buf);
-            buf.clear();
-        }
-    };
-    for (const Vec3f& v : m.positions) {
-        detail::append_float(buf, v.x);
-        buf += ' ';
-        detail::append_float(buf, v.y);
-        buf += ' ';
-        detail::append_float(buf, v.z);
-        buf += '\n';
-        flush();
-    }
-    for (const Tri& t : m.triangles) {
-        buf += '3';
-        for (const std::uint32_t i : t) {
-            buf += ' ';
-            detail::append_uint(buf, i);
-        }
-        buf += '\n';
-        flush();
-    }
-    f.write(buf);
+    detail::write_ascii_vertices_and_faces(f, buf, m);
     f.commit();
 }
 

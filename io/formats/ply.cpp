@@ -531,24 +531,7 @@ void write_ply(const std::string& path, const Mesh& m, const WriteOptions& opt) 
             flush();
         }
     } else {
-        for (const Vec3f& v : m.positions) {
-            detail::append_float(buf, v.x);
-            buf += ' ';
-            detail::append_float(buf, v.y);
-            buf += ' ';
-            detail::append_float(buf, v.z);
-            buf += '\n';
-            flush();
-        }
-        for (const Tri& t : m.triangles) {
-            buf += '3';
-            for (const std::uint32_t i : t) {
-                buf += ' ';
-                detail::append_uint(buf, i);
-            }
-            buf += '\n';
-            flush();
-        }
+        detail::write_ascii_vertices_and_faces(f, buf, m);
     }
     f.write(buf);
     f.commit();
