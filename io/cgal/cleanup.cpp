@@ -39,18 +39,6 @@ using Point = K::Point_3;
 using SM = CGAL::Surface_mesh<Point>;
 using face_descriptor = SM::Face_index;
 
-void check_input(const Mesh& m) {
-    const std::size_t n = m.positions.size();
-    for (std::size_t i = 0; i < n; ++i)
-        if (!is_finite(m.positions[i]))
-            throw InvalidInput("cleanup_mesh: position " + std::to_string(i) + " is not finite");
-    for (std::size_t f = 0; f < m.triangles.size(); ++f)
-        for (int k = 0; k < 3; ++k)
-            if (m.triangles[f][k] >= n)
-                throw InvalidInput("cleanup_mesh: face " + std::to_string(f) + " has vertex index " +
-                                   std::to_string(m.triangles[f][k]) + ", expected < " + std::to_string(n));
-}
-
 void check_options(const CleanupOptions& o) {
     auto bad = [](const std::string& what) { throw InvalidInput("cleanup_mesh: " + what); };
     if (!(o.needle_threshold > 1.0)) bad("needle_threshold must be > 1");
@@ -225,7 +213,7 @@ SampledDistance sampled_hausdorff(const Mesh& a, const Mesh& b, int samples_per_
 
 CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
-    check_input(m);
+    check_mesh(m, "cleanup_mesh");
     check_options(opt);
     CleanupReport rep;
     rep.faces_before = m.triangles.size();

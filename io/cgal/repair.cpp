@@ -1,6 +1,8 @@
 // All CGAL code of repair.h lives in this one translation unit.
 #include "io/cgal/repair.h"
 
+#include "core/union_find.h"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
@@ -22,34 +24,8 @@ using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
 using Poly = std::array<std::size_t, 3>;
 
-void check_input(const Mesh& m, const char* who) {
-    const std::size_t n = m.positions.size();
-    for (std::size_t i = 0; i < n; ++i)
-        if (!is_finite(m.positions[i]))
-            throw InvalidInput(std::string(who) + ": position " + std::to_string(i) + " is not finite");
-    for (std::size_t f = 0; f < m.triangles.size(); ++f)
-        for (int k = 0; k < 3; ++k)
-            if (m.triangles[f][k] >= n)
-                throw InvalidInput(std::string(who) + ": face " + std::to_string(f) + " has vertex index " +
-                                   std::to_string(m.triangles[f][k]) + ", expected < " + std::to_string(n));
-}
-
 template <class T>
 bool collapsed(const T& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
-
-struct UnionFind {
-    std::vector<std::size_t> parent;
-    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), std::size_t(0)); }
-    std::size_t find(std::size_t x) {
-        while (parent[x] != x) x = parent[x] = parent[parent[x]];
-        return x;
-    }
-    void unite(std::size_t a, std::size_t b) {
-        a = find(a);
-        b = find(b);
-        if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
-};
 
 /// Undirected edges of the non-collapsed faces: (min, max, face, reversed), sorted by edge then face.
 struct Edge {
@@ -81,7 +57,7 @@ struct ReverseRecorder : PMP::Default_orientation_visitor {
 }  // namespace
 
 std::size_t count_self_intersections(const Mesh& mesh) {
-    check_input(mesh, "count_self_intersections");
+    check_mesh(mesh, "count_self_intersections");
     const Mesh m = weld_exact(mesh);
     std::vector<Point> pts;
     pts.reserve(m.positions.size());
@@ -139,7 +115,7 @@ std::size_t count_self_intersections(const Mesh& mesh) {
 }
 
 RepairReport repair_mesh(Mesh& m, const RepairOptions& opt) {
-    check_input(m, "repair_mesh");
+    check_mesh(m, "repair_mesh");
     RepairReport rep;
 
     std::vector<Point> pts;
@@ -209,7 +185,7 @@ RepairReport repair_mesh(Mesh& m, const RepairOptions& opt) {
         // 5. Patches: faces joined across edges with exactly two faces. A closed patch (all of its
         //    edges have two faces) with negative volume is reversed.
         const std::vector<Edge> edges = sorted_edges(polys);
-        UnionFind uf(polys.size());
+        detail::UnionFind<std::size_t> uf(polys.size());
         std::vector<char> open(polys.size(), 0);
         std::size_t inconsistent = 0;
         for (std::size_t i = 0; i < edges.size();) {

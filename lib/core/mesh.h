@@ -35,6 +35,10 @@ struct Box3d {
 };
 
 /// Bounding box of all positions of m.
+/// Throws InvalidInput naming `who` unless every position of m is finite and every face index is
+/// below positions.size() ("who: position 7 is not finite", "who: face 3 has vertex index 9, expected < 8").
+void check_mesh(const Mesh& m, const char* who);
+
 inline Box3d bounding_box(const Mesh& m) {
     Box3d b;
     for (const auto& p : m.positions) b.extend(Vec3d(p));

@@ -1,4 +1,5 @@
 #include "core/mesh_report.h"
+#include "core/union_find.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,29 +9,8 @@
 #include "core/errors.h"
 
 namespace normalflow {
-namespace {
 
-/// Union-find with path halving; the smaller index becomes the root (deterministic).
-struct UnionFind {
-    std::vector<std::uint32_t> parent;
-    explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-    std::uint32_t find(std::uint32_t x) {
-        while (parent[x] != x) {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        return x;
-    }
-    void unite(std::uint32_t a, std::uint32_t b) {
-        a = find(a);
-        b = find(b);
-        if (a == b) return;
-        if (a < b) parent[b] = a;
-        else parent[a] = b;
-    }
-};
-
-void check_input(const Mesh& m, const char* who) {
+void check_mesh(const Mesh& m, const char* who) {
     const std::size_t n = m.positions.size();
     for (std::size_t i = 0; i < n; ++i)
         if (!is_finite(m.positions[i]))
@@ -41,6 +21,8 @@ void check_input(const Mesh& m, const char* who) {
                 throw InvalidInput(std::string(who) + ": face " + std::to_string(f) + " has vertex index " +
                                    std::to_string(m.triangles[f][k]) + ", expected < " + std::to_string(n));
 }
+
+namespace {
 
 /// New index of every position after exact welding (first occurrence order); returns #unique.
 std::size_t weld_map(const std::vector<Vec3f>& p, std::vector<std::uint32_t>& old_to_new) {
@@ -99,7 +81,7 @@ bool exactly_collinear(const Vec3f& a, const Vec3f& b, const Vec3f& c) {
 }
 
 Mesh weld_exact(const Mesh& m, std::vector<std::uint32_t>* old_to_new) {
-    check_input(m, "weld_exact");
+    check_mesh(m, "weld_exact");
     std::vector<std::uint32_t> map;
     const std::size_t n = weld_map(m.positions, map);
     Mesh out;
@@ -114,7 +96,7 @@ Mesh weld_exact(const Mesh& m, std::vector<std::uint32_t>* old_to_new) {
 }
 
 MeshReport mesh_report(const Mesh& m) {
-    check_input(m, "mesh_report");
+    check_mesh(m, "mesh_report");
     MeshReport r;
     r.input_vertices = m.positions.size();
     r.faces = m.triangles.size();
@@ -196,13 +178,13 @@ MeshReport mesh_report(const Mesh& m) {
 
     // Fans around vertices: union-find over corners (3f + k) of non-collapsed faces. The corners at
     // vertex a of all faces on edge {a,b} are joined, and likewise at b.
-    UnionFind corners(3 * nf);
+    detail::UnionFind<std::uint32_t> corners(3 * nf);
     auto corner_of = [&](std::uint32_t f, std::uint32_t v) {
         for (std::uint32_t k = 0; k < 3; ++k)
             if (w[f][k] == v) return 3 * f + k;
         return 3 * f;  // unreachable for non-collapsed faces
     };
-    UnionFind comps(nv);
+    detail::UnionFind<std::uint32_t> comps(nv);
     for (std::size_t i = 0; i < he.size();) {
         std::size_t j = i;
         while (j < he.size() && he[j].key == he[i].key) ++j;
