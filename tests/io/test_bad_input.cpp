@@ -1,6 +1,7 @@
 // Bad input for the mesh readers and writers (io/formats/mesh_formats.h, io/io.h): every truncation
 // of a small valid file, garbage, bit flips, NaN, out-of-range indices, faces with < 3 corners,
 // absurd header counts, missing files, unknown extensions, unwritable paths, failed writes.
+#include "support/test_files.h"
 #include "io/formats/mesh_formats.h"
 
 #include <vector>
@@ -20,35 +21,14 @@
 namespace fs = std::filesystem;
 using namespace normalflow;
 
+using normalflow::test::slurp;
+using normalflow::test::TempDir;
+
 namespace {
 
 const std::string kFixtures = std::string(NORMALFLOW_TEST_FIXTURES);
 
 using Reader = std::function<Mesh(std::string_view, const std::string&)>;
-
-std::string slurp(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
-
-class TempDir {
-public:
-    TempDir() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::temp_directory_path() / ("nf_bad_" + std::string(info->test_suite_name()) + "_" + info->name() +
-                                            "_" + std::to_string(::getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    ~TempDir() { fs::remove_all(dir_); }
-    std::string operator/(const std::string& name) const { return (dir_ / name).string(); }
-    const fs::path& path() const { return dir_; }
-
-private:
-    fs::path dir_;
-};
 
 Mesh cube() {
     Mesh m;

@@ -1,5 +1,6 @@
 // Tests for io/formats/mesh_formats.h and io/io.h: hand-made fixtures with known contents,
 // bit-exact round trips of every format and variant, then real models from shared/data.
+#include "support/test_files.h"
 #include "io/formats/mesh_formats.h"
 
 #include <gtest/gtest.h>
@@ -17,28 +18,13 @@
 namespace fs = std::filesystem;
 using namespace normalflow;
 
+using normalflow::test::slurp;
+using normalflow::test::TempDir;
+
 namespace {
 
 const std::string kFixtures = std::string(NORMALFLOW_TEST_FIXTURES);
 const std::string kData = std::string(NORMALFLOW_TEST_DATA);
-
-/// A fresh, empty temporary folder per test.
-class TempDir {
-public:
-    TempDir() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::temp_directory_path() / ("nf_formats_" + std::string(info->test_suite_name()) + "_" + info->name() +
-                                            "_" + std::to_string(::getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    ~TempDir() { fs::remove_all(dir_); }
-    std::string operator/(const std::string& name) const { return (dir_ / name).string(); }
-    const fs::path& path() const { return dir_; }
-
-private:
-    fs::path dir_;
-};
 
 // The unit cube of the fixtures: 8 corners, 6 quads, split into the fans (0,k,k+1).
 const std::vector<Vec3f> kCubeV = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
@@ -91,13 +77,6 @@ Mesh tricky_mesh() {
     for (int i = 0; i < 300; ++i) m.triangles.push_back({pick(rng), pick(rng), pick(rng)});
     m.triangles.push_back({n - 1, 0, n - 2});  // touches the first and last vertex
     return m;
-}
-
-std::string slurp(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
 }
 
 }  // namespace

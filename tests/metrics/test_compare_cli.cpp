@@ -8,20 +8,16 @@
 #include <sstream>
 #include <string>
 
+#include "support/test_files.h"
 #include "io/io.h"
 #include "metric_test_meshes.h"
 
 namespace normalflow {
+using normalflow::test::slurp;
+
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
 
 int run(const std::string& args, const fs::path& out) {
     const std::string cmd = std::string(NORMALFLOW_EXE) + " " + args + " > " + out.string() + " 2>&1";
