@@ -1,9 +1,21 @@
-// nf_bench_study [DATA_DIR] [--samples N] [--csv FILE]: the mesh-side baselines on the noisy/ground-truth
-// pairs of shared/data/pairs_gnf (X_gt.ply and X_<noise>.ply). For each noisy mesh: Taubin at its best
-// iteration count (the one with the lowest mean distance to the ground truth, an oracle choice in
-// Taubin's favour), plain Laplacian (10 steps), bilateral normal filtering (defaults), and the noisy
-// input itself. Prints a Markdown table: distance and normal-angle error vs ground truth, time.
-// normalflow's own rows are added by the pipeline benchmark. Not part of the test suite.
+// nf_bench_study [DATA_DIR] [--samples N] [--resolution R] [--threads T] [--only SUBSTRING]...
+//                [--no-normalflow] [--csv FILE] [--md FILE]
+// The comparison study of issue 6 on every noisy/ground-truth pair of shared/data: pairs_gnf, pairs_gcn
+// and pairs_nllr (DATA_DIR is shared/data). For each noisy mesh:
+//   - the noisy input itself;
+//   - Taubin λ|μ at its best iteration count (K from 1 to 200, the K with the lowest mean distance to
+//     the ground truth: an oracle choice in Taubin's favour);
+//   - plain Laplacian (10 steps, to show shrinkage) and bilateral normal filtering (defaults);
+//   - normalflow isotropic and anisotropic (scan conversion at resolution R + smooth_volume with the
+//     defaults + extraction; the time includes all three);
+//   - the published result of the method the pair comes from, where the folder has one
+//     (X.nllr_result.ply: Li et al. 2018, NLLR; X.gcn_result.ply: Shen et al. 2022, GCN-Denoiser).
+// Metrics (compare_meshes, no vertex correspondence): mean / RMS / Hausdorff distance relative to the
+// ground truth's diagonal, mean normal angle (area-uniform samples on the result, its face normal
+// against the ground truth's face normal at the closest point), volume change, crease preservation.
+// Prints a Markdown table (and writes it with --md, the rows as CSV with --csv after every pair).
+// Then the triangulation experiment: one torus meshed two ways, smoothed by Taubin and by normalflow.
+// Not part of the test suite (minutes to an hour; see benchmarks/README.md).
 #include <algorithm>
 #include <cmath>
 #include <utility>
@@ -16,8 +28,12 @@
 
 #include "io/formats/atomic_file.h"
 #include "io/io.h"
+#include "extract/extract_surface.h"
 #include "io/openmesh/smoothing.h"
 #include "metrics/compare.h"
+#include "normals/smooth.h"
+#include "sdf/closest_triangle.h"
+#include "sdf/scan_convert.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -25,7 +41,7 @@ using namespace normalflow;
 namespace {
 
 struct Row {
-    std::string model, noisy, method, params;
+    std::string set, noisy, method, params;
     double ms = 0;
     MeshComparison c;
 };
@@ -64,6 +80,66 @@ std::pair<double, double> torus_error(const Mesh& m, double R, double r) {
     return {mx, std::sqrt(s2 / double(m.positions.size()))};
 }
 
+/// One noisy input with its ground truth and, where the data has one, a published result.
+struct Pair {
+    std::string set, noisy_name;  // e.g. "pairs_gnf", "fandisk_n0.3"
+    fs::path noisy, truth;
+    std::vector<std::pair<std::string, fs::path>> published;  // method label, result mesh
+};
+
+std::string published_label(const std::string& file) {
+    if (file.find(".nllr_result") != std::string::npos) return "NLLR (published result, Li et al. 2018)";
+    if (file.find(".gcn_result") != std::string::npos) return "GCN-Denoiser (published result, Shen et al. 2022)";
+    return "published result";
+}
+
+/// The pairs of shared/data, following SOURCES.md: X_<noise>.ply with X_gt.ply in the same folder;
+/// pairs_nllr's nicolo_i2 takes pairs_gnf/nicolo_gt.ply, and NLLR's julius result belongs to
+/// pairs_gnf/julius_n0.2.ply (the same noisy mesh up to 1e-7).
+std::vector<Pair> find_pairs(const fs::path& data) {
+    std::vector<Pair> pairs;
+    for (const char* set : {"pairs_gnf", "pairs_gcn", "pairs_nllr"}) {
+        const fs::path dir = data / set;
+        if (!fs::is_directory(dir)) continue;
+        std::vector<fs::path> files;
+        for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path());
+        std::sort(files.begin(), files.end());
+        for (const fs::path& f : files) {
+            const std::string stem = f.stem().string();
+            if (f.extension() != ".ply" || stem.ends_with("_gt") || stem.find("result") != std::string::npos) continue;
+            const auto us = stem.rfind('_');
+            if (us == std::string::npos) continue;
+            const std::string model = stem.substr(0, us);
+            fs::path gt = dir / (model + "_gt.ply");
+            if (!fs::exists(gt)) gt = data / "pairs_gnf" / (model + "_gt.ply");
+            if (!fs::exists(gt)) continue;
+            Pair p{set, stem, f, gt, {}};
+            for (const fs::path& r : files) {
+                const std::string rn = r.filename().string();
+                if (rn.starts_with(stem + ".") && rn.find("_result") != std::string::npos)
+                    p.published.emplace_back(published_label(rn), r);
+            }
+            if (stem == "julius_n0.2" && fs::exists(data / "pairs_nllr/julius_n2.nllr_result.ply"))
+                p.published.emplace_back(published_label("nllr_result"), data / "pairs_nllr/julius_n2.nllr_result.ply");
+            pairs.push_back(std::move(p));
+        }
+    }
+    return pairs;
+}
+
+/// normalflow's whole pipeline on m: scan conversion at `resolution`, smooth_volume, extraction.
+Mesh normalflow_smooth(const Mesh& m, int resolution, SmoothMode mode, int threads) {
+    ScanConvertOptions so;
+    so.resolution = resolution;
+    so.threads = threads;
+    Volume v = scan_convert(m, *make_bvh_query(m), so);
+    SmoothOptions o;
+    o.mode = mode;
+    o.threads = threads;
+    smooth_volume(v, o);
+    return extract_surface(v);
+}
+
 double now_ms() {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -71,62 +147,87 @@ double now_ms() {
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string data = std::string(NORMALFLOW_TEST_DATA) + "/pairs_gnf";
-    std::string csv_path;
+    fs::path data = NORMALFLOW_TEST_DATA;
+    std::string csv_path, md_path;
+    std::vector<std::string> only;
+    int resolution = 256, threads = 0;
+    bool with_normalflow = true;
     CompareOptions co;
     co.sampling.samples = 50000;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
-        if (a == "--samples" && i + 1 < argc) co.sampling.samples = std::strtoull(argv[++i], nullptr, 10);
-        else if (a == "--csv" && i + 1 < argc) csv_path = argv[++i];
-        else data = a;
+        const bool has = i + 1 < argc;
+        if (a == "--samples" && has) co.sampling.samples = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--csv" && has) csv_path = argv[++i];
+        else if (a == "--md" && has) md_path = argv[++i];
+        else if (a == "--resolution" && has) resolution = std::atoi(argv[++i]);
+        else if (a == "--threads" && has) threads = std::atoi(argv[++i]);
+        else if (a == "--only" && has) only.emplace_back(argv[++i]);
+        else if (a == "--no-normalflow") with_normalflow = false;
+        else if (!a.starts_with("--")) data = a;
+        else {
+            std::fprintf(stderr, "nf_bench_study: unknown or incomplete argument %s\n", a.c_str());
+            return 2;
+        }
     }
-    if (!fs::is_directory(data)) {
-        std::fprintf(stderr, "nf_bench_study: %s: no such folder\n", data.c_str());
+    const std::vector<Pair> pairs = find_pairs(data);
+    if (pairs.empty()) {
+        std::fprintf(stderr, "nf_bench_study: %s: no pairs (pairs_gnf, pairs_gcn, pairs_nllr)\n", data.string().c_str());
         return 1;
     }
-    std::vector<fs::path> noisy_files;
-    for (const auto& e : fs::directory_iterator(data)) {
-        const std::string n = e.path().filename().string();
-        if (e.path().extension() == ".ply" && n.find("_gt") == std::string::npos && n.find("result") == std::string::npos)
-            noisy_files.push_back(e.path());
-    }
-    std::sort(noisy_files.begin(), noisy_files.end());
 
     std::vector<Row> rows;
-    try {
-        for (const fs::path& np : noisy_files) {
-            const std::string stem = np.stem().string();
-            const std::string model = stem.substr(0, stem.find('_'));
-            const fs::path gp = np.parent_path() / (model + "_gt.ply");
-            if (!fs::exists(gp)) continue;
-            const Mesh gt = read_mesh(gp.string());
-            const Mesh noisy = read_mesh(np.string());
+    std::string csv = "set,noisy,method,parameters,ms,mean_relative,rms_relative,hausdorff_relative,"
+                      "mean_normal_angle_deg,volume_change,crease_preservation\n";
+    auto save_csv = [&] {
+        if (csv_path.empty()) return;
+        AtomicFile f(csv_path, "nf_bench_study");
+        f.write(csv);
+        f.commit();
+    };
+    int failures = 0;
+    for (const Pair& p : pairs) {
+        const std::string key = p.set + "/" + p.noisy_name;
+        if (!only.empty() &&
+            std::none_of(only.begin(), only.end(), [&](const std::string& o) { return key.find(o) != std::string::npos; }))
+            continue;
+        try {
+            const Mesh gt = read_mesh(p.truth.string());
+            const Mesh noisy = read_mesh(p.noisy.string());
             auto add = [&](const std::string& method, const std::string& params, double ms, const Mesh& m) {
-                rows.push_back({model, stem, method, params, ms, compare_meshes(m, gt, co)});
+                rows.push_back({p.set, p.noisy_name, method, params, ms, compare_meshes(m, gt, co)});
                 const Row& r = rows.back();
-                std::fprintf(stderr, "%s %s %s: mean/diag %.3e, normal %.2f deg, %.1f ms\n", stem.c_str(), method.c_str(),
-                             params.c_str(), r.c.mean_relative, r.c.distance.mean_normal_angle_deg, ms);
+                char buf[512];
+                std::snprintf(buf, sizeof buf, "%s,%s,\"%s\",\"%s\",%.3f,%.6e,%.6e,%.6e,%.4f,%.6f,%.4f\n",
+                              r.set.c_str(), r.noisy.c_str(), r.method.c_str(), r.params.c_str(), r.ms,
+                              r.c.mean_relative, r.c.rms_relative, r.c.hausdorff_relative,
+                              r.c.distance.mean_normal_angle_deg, r.c.volume_change, r.c.crease.fraction);
+                csv += buf;
+                std::fprintf(stderr, "%s %s %s: mean/diag %.3e, normal %.2f deg, %.1f ms\n", key.c_str(),
+                             method.c_str(), params.c_str(), r.c.mean_relative, r.c.distance.mean_normal_angle_deg, ms);
             };
             add("noisy input", "", 0, noisy);
 
             // Taubin: best iteration count by mean distance to the ground truth.
-            Row best;
-            bool have = false;
-            for (int k : {1, 2, 3, 5, 8, 12, 20, 30, 50}) {
+            Mesh best_mesh;
+            std::string best_params;
+            double best_ms = 0, best_mean = 0;
+            for (int k : {1, 2, 3, 5, 8, 12, 20, 30, 50, 80, 120, 200}) {
                 Mesh m = noisy;
                 TaubinOptions o;
                 o.iterations = k;
                 const double t0 = now_ms();
                 taubin_smooth(m, o);
                 const double ms = now_ms() - t0;
-                MeshComparison c = compare_meshes(m, gt, co);
-                if (!have || c.distance.mean < best.c.distance.mean) {
-                    best = {model, stem, "Taubin λ|μ (best K)", "K=" + std::to_string(k), ms, c};
-                    have = true;
+                const double mean = surface_distance(m, gt, co.sampling).mean;
+                if (best_params.empty() || mean < best_mean) {
+                    best_mesh = std::move(m);
+                    best_params = "K=" + std::to_string(k);
+                    best_ms = ms;
+                    best_mean = mean;
                 }
             }
-            rows.push_back(best);
+            add("Taubin λ|μ (best K)", best_params, best_ms, best_mesh);
 
             Mesh lap = noisy;
             double t0 = now_ms();
@@ -137,28 +238,33 @@ int main(int argc, char** argv) {
             t0 = now_ms();
             bilateral_normal_filter(bil, {});
             add("bilateral normal", "20+10 it., σr=0.35", now_ms() - t0, bil);
+
+            if (with_normalflow) {
+                for (const SmoothMode mode : {SmoothMode::Isotropic, SmoothMode::Anisotropic}) {
+                    t0 = now_ms();
+                    const Mesh m = normalflow_smooth(noisy, resolution, mode, threads);
+                    add(std::string("normalflow ") + to_string(mode), "R=" + std::to_string(resolution) + ", defaults",
+                        now_ms() - t0, m);
+                }
+            }
+            for (const auto& [label, path] : p.published) add(label, "", 0, read_mesh(path.string()));
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "nf_bench_study: %s: %s\n", key.c_str(), e.what());
+            ++failures;
         }
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "nf_bench_study: %s\n", e.what());
-        return 1;
+        save_csv();
     }
 
     std::string md =
-        "| noisy mesh | method | parameters | ms | mean dist / diag | RMS / diag | Hausdorff / diag | normal angle ° | "
-        "volume Δ | crease kept |\n|---|---|---|---|---|---|---|---|---|---|\n";
-    std::string csv = "noisy,method,parameters,ms,mean_relative,rms_relative,hausdorff_relative,mean_normal_angle_deg,"
-                      "volume_change,crease_preservation\n";
+        "| set | noisy mesh | method | parameters | ms | mean dist / diag | RMS / diag | Hausdorff / diag | "
+        "normal angle ° | volume Δ | crease kept |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
         char buf[512];
-        std::snprintf(buf, sizeof buf, "| %s | %s | %s | %.1f | %.3e | %.3e | %.3e | %.2f | %+.2f%% | %.1f%% |\n",
-                      r.noisy.c_str(), r.method.c_str(), r.params.c_str(), r.ms, r.c.mean_relative, r.c.rms_relative,
-                      r.c.hausdorff_relative, r.c.distance.mean_normal_angle_deg, 100 * r.c.volume_change,
-                      100 * r.c.crease.fraction);
+        std::snprintf(buf, sizeof buf, "| %s | %s | %s | %s | %.0f | %.3e | %.3e | %.3e | %.2f | %+.2f%% | %.1f%% |\n",
+                      r.set.c_str(), r.noisy.c_str(), r.method.c_str(), r.params.c_str(), r.ms, r.c.mean_relative,
+                      r.c.rms_relative, r.c.hausdorff_relative, r.c.distance.mean_normal_angle_deg,
+                      100 * r.c.volume_change, 100 * r.c.crease.fraction);
         md += buf;
-        std::snprintf(buf, sizeof buf, "%s,\"%s\",\"%s\",%.3f,%.6e,%.6e,%.6e,%.4f,%.6f,%.4f\n", r.noisy.c_str(),
-                      r.method.c_str(), r.params.c_str(), r.ms, r.c.mean_relative, r.c.rms_relative, r.c.hausdorff_relative,
-                      r.c.distance.mean_normal_angle_deg, r.c.volume_change, r.c.crease.fraction);
-        csv += buf;
     }
     std::printf("%s", md.c_str());
 
@@ -174,16 +280,30 @@ int main(int argc, char** argv) {
         taubin_smooth(b, o);
         const auto ea = torus_error(a, R, r), eb = torus_error(b, R, r);
         const MeshComparison ab = compare_meshes(b, a, co);
-        std::printf("\nTriangulation dependence (torus R=1, r=0.4, 96x48, Taubin K=20, uniform weights):\n\n"
-                    "| triangulation | max vertex distance to the torus | RMS |\n|---|---|---|\n"
-                    "| uniform | %.3e | %.3e |\n| graded (u clustered) | %.3e | %.3e |\n\n"
-                    "Hausdorff between the two results: %.3e (%.3e of the diagonal)\n",
-                    ea.first, ea.second, eb.first, eb.second, ab.distance.hausdorff, ab.hausdorff_relative);
+        std::string tri = "\nTriangulation dependence (torus R=1, r=0.4, 96x48 quads, uniform vs u-graded):\n\n"
+                          "| method | max vertex distance to the torus (uniform / graded) | Hausdorff between the two results "
+                          "(/ diagonal) |\n|---|---|---|\n";
+        char buf[512];
+        std::snprintf(buf, sizeof buf, "| Taubin K=20, uniform weights | %.3e / %.3e | %.3e (%.3e) |\n", ea.first,
+                      eb.first, ab.distance.hausdorff, ab.hausdorff_relative);
+        tri += buf;
+        if (with_normalflow) {  // normalflow sees only the volume, not the triangulation
+            const Mesh na = normalflow_smooth(a0, 128, SmoothMode::Isotropic, threads);
+            const Mesh nb = normalflow_smooth(b0, 128, SmoothMode::Isotropic, threads);
+            const auto fa = torus_error(na, R, r), fb = torus_error(nb, R, r);
+            const MeshComparison nab = compare_meshes(nb, na, co);
+            std::snprintf(buf, sizeof buf, "| normalflow isotropic, R=128, defaults | %.3e / %.3e | %.3e (%.3e) |\n",
+                          fa.first, fb.first, nab.distance.hausdorff, nab.hausdorff_relative);
+            tri += buf;
+        }
+        std::printf("%s", tri.c_str());
+        md += tri;
     }
-    if (!csv_path.empty()) {
-        AtomicFile f(csv_path, "nf_bench_study");
-        f.write(csv);
+    save_csv();
+    if (!md_path.empty()) {
+        AtomicFile f(md_path, "nf_bench_study");
+        f.write(md);
         f.commit();
     }
-    return 0;
+    return failures ? 1 : 0;
 }
