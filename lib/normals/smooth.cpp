@@ -1,6 +1,7 @@
 #include "normals/smooth.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -53,14 +54,14 @@ struct Neighbourhood {
     std::int32_t slot[27];
     std::uint8_t nb[3][L];
     std::uint8_t li[3][L];
-    int ext[3];  // in-grid extent of the block itself
+    int ext[3];            // in-grid extent of the block itself
+    bool contiguous_x;     // local x 0..7 read the block's own row unclamped (a memcpy)
 };
 
-/// Per-thread scratch of the kernels.
+/// Per-thread scratch of the kernels (a view into a thread-local buffer).
 struct Scratch {
-    std::unique_ptr<float[]> buf;
-    explicit Scratch(std::size_t n) : buf(std::make_unique_for_overwrite<float[]>(n)) {}
-    float* at(int k) { return buf.get() + std::size_t(k) * L3; }
+    float* buf;
+    float* at(int k) { return buf + std::size_t(k) * L3; }
 };
 
 /// G(κ²), the penalty of the normal energy, and its derivative g.
@@ -90,6 +91,46 @@ inline void face_terms(const float* P, const float* const N[3], int q, int sa, i
         c2 += C * C;
     }
     k2 = std::max(dn2 - c2 * g2, 0.0f);
+}
+
+/// face_terms over one row of faces q0 … q0+n−1 (contiguous in x), branch-free so that the
+/// compiler vectorises it: the same operations in the same order as face_terms, so the results are
+/// bit-identical. F = g·m (g = G[q] when kFrozen, else 1) or 0 where both samples of the face lie
+/// outside the band (the faces the engine skips); K = κ².
+template <bool kFrozen>
+void face_row(const float* __restrict P, const float* __restrict N0, const float* __restrict N1,
+              const float* __restrict N2, const float* __restrict G, int q0, int n, int sa, int sb, int sc,
+              float band, float* __restrict F0, float* __restrict F1, float* __restrict F2, float* __restrict K) {
+    for (int j = 0; j < n; ++j) {
+        const int q = q0 + j;
+        const int q1 = q + sa;
+        const float dphi = P[q1] - P[q];
+        const float gb = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q1 + sb] - P[q1 - sb]));
+        const float gc = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q1 + sc] - P[q1 - sc]));
+        const float g2 = dphi * dphi + gb * gb + gc * gc;
+        const float inv = 1.0f / std::max(g2, 1e-12f);
+        const float a0 = N0[q1] - N0[q];
+        const float b0 = 0.25f * ((N0[q + sb] - N0[q - sb]) + (N0[q1 + sb] - N0[q1 - sb]));
+        const float d0 = 0.25f * ((N0[q + sc] - N0[q - sc]) + (N0[q1 + sc] - N0[q1 - sc]));
+        const float C0 = (a0 * dphi + b0 * gb + d0 * gc) * inv;
+        const float a1 = N1[q1] - N1[q];
+        const float b1 = 0.25f * ((N1[q + sb] - N1[q - sb]) + (N1[q1 + sb] - N1[q1 - sb]));
+        const float d1 = 0.25f * ((N1[q + sc] - N1[q - sc]) + (N1[q1 + sc] - N1[q1 - sc]));
+        const float C1 = (a1 * dphi + b1 * gb + d1 * gc) * inv;
+        const float a2 = N2[q1] - N2[q];
+        const float b2 = 0.25f * ((N2[q + sb] - N2[q - sb]) + (N2[q1 + sb] - N2[q1 - sb]));
+        const float d2 = 0.25f * ((N2[q + sc] - N2[q - sc]) + (N2[q1 + sc] - N2[q1 - sc]));
+        const float C2 = (a2 * dphi + b2 * gb + d2 * gc) * inv;
+        const float dn2 = ((a0 * a0 + b0 * b0 + d0 * d0) + (a1 * a1 + b1 * b1 + d1 * d1)) + (a2 * a2 + b2 * b2 + d2 * d2);
+        const float c2 = (C0 * C0 + C1 * C1) + C2 * C2;
+        const float k2 = std::max(dn2 - c2 * g2, 0.0f);
+        const bool skip = std::abs(P[q]) > band && std::abs(P[q1]) > band;
+        const float g = kFrozen ? G[q] : 1.0f;
+        F0[q] = skip ? 0.0f : g * (a0 - dphi * C0);
+        F1[q] = skip ? 0.0f : g * (a1 - dphi * C1);
+        F2[q] = skip ? 0.0f : g * (a2 - dphi * C2);
+        K[q] = k2;
+    }
 }
 
 class LevelSetEngine {
@@ -192,6 +233,9 @@ private:
                 n.li[a][l + 1] = std::uint8_t(g & (kBlockDim - 1));
             }
         }
+        n.contiguous_x = true;
+        for (int l = 0; l < kBlockDim; ++l)
+            if (n.nb[0][l + 1] != 1 || n.li[0][l + 1] != l) n.contiguous_x = false;
         for (int dz = 0; dz < 3; ++dz)
             for (int dy = 0; dy < 3; ++dy)
                 for (int dx = 0; dx < 3; ++dx) {
@@ -205,18 +249,31 @@ private:
     }
 
     /// Copies field f (with halo 1) into out; unallocated blocks give t_in / t_out.
+    /// Row by row: the 8 interior samples of a row come from one block (one memcpy or fill).
     static void gather(const Neighbourhood& n, const float* f, float t_in, float t_out, float* out) {
-        int o = 0;
         for (int z = 0; z < L; ++z) {
             const int nz = n.nb[2][z], lz = n.li[2][z];
             for (int y = 0; y < L; ++y) {
                 const int ny = n.nb[1][y], ly = n.li[1][y];
                 const int row = (lz * kBlockDim + ly) * kBlockDim;
-                for (int x = 0; x < L; ++x, ++o) {
-                    const std::int32_t s = n.slot[(nz * 3 + ny) * 3 + n.nb[0][x]];
-                    out[o] = s >= 0 ? f[std::size_t(s) * kBlockVoxels + row + n.li[0][x]]
-                                    : (s == kBlockInside ? t_in : t_out);
+                const std::int32_t* srow = n.slot + (nz * 3 + ny) * 3;
+                float* o = out + (z * L + y) * L;
+                auto fetch = [&](int x) {
+                    const std::int32_t s = srow[n.nb[0][x]];
+                    return s >= 0 ? f[std::size_t(s) * kBlockVoxels + row + n.li[0][x]]
+                                  : (s == kBlockInside ? t_in : t_out);
+                };
+                o[0] = fetch(0);
+                if (n.contiguous_x) {
+                    const std::int32_t s = srow[1];
+                    if (s >= 0)
+                        std::memcpy(o + 1, f + std::size_t(s) * kBlockVoxels + row, sizeof(float) * kBlockDim);
+                    else
+                        std::fill(o + 1, o + 1 + kBlockDim, s == kBlockInside ? t_in : t_out);
+                } else {
+                    for (int x = 1; x <= kBlockDim; ++x) o[x] = fetch(x);
                 }
+                o[L - 1] = fetch(L - 1);
             }
         }
     }
@@ -233,9 +290,12 @@ private:
     /// parallel_for over a list of block slots; body(slot, scratch).
     template <class Body>
     void for_blocks(const std::vector<std::int32_t>& list, int scratch_fields, Body&& body) const {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, list.size(), 2),
+        const std::size_t need = std::size_t(scratch_fields) * L3;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, list.size(), 4),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              Scratch s(std::size_t(scratch_fields) * L3);
+                              std::vector<float>& buf = scratch_.local();
+                              if (buf.size() < need) buf.resize(need);
+                              Scratch s{buf.data()};
                               for (std::size_t i = r.begin(); i != r.end(); ++i) body(i, list[i], s);
                           });
     }
@@ -266,7 +326,7 @@ private:
         for (std::size_t b = 0; b < nb; ++b) all[b] = std::int32_t(b);
         for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
             Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+            neighbourhood(std::size_t(b), n);  // the blocks are about to change: no cached nbh_
             float* P = s.at(0);
             gather_phi(n, phi_, P);
             bool found = false;
@@ -339,6 +399,11 @@ private:
         }
         hn_.resize(n);
         mask_.resize(n);
+        nbh_.resize(nblocks());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks(), 64),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t b = r.begin(); b != r.end(); ++b) neighbourhood(b, nbh_[b]);
+                          });
     }
 
     /// φ ← signed distance in the band: interface samples keep φ/|∇φ| (bounded by the distance to
@@ -351,8 +416,7 @@ private:
         std::vector<float>& u2 = aux_[0];    // ping-pong buffer
         std::atomic<bool> bad{false};
         for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
-            Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
             gather_phi(n, phi_, P);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
@@ -386,13 +450,24 @@ private:
                     }
         });
         if (bad) fail("distance during reinitialisation");
-        std::vector<std::uint8_t> changed(nb);
+        // A block whose 27-neighbourhood did not change in the last pass would compute what it
+        // already holds in both buffers (u2 = u there): it is skipped, which changes no value.
+        std::vector<std::uint8_t> changed(nb, 1);
+        std::vector<std::int32_t> todo;
+        todo.reserve(nb);
         const int max_passes = int(kHalfWidth * 3);
         for (int pass = 0; pass < max_passes; ++pass) {
             poll();
-            for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
-                Neighbourhood n;
-                neighbourhood(std::size_t(b), n);
+            todo.clear();
+            for (std::size_t b = 0; b < nb; ++b) {
+                const Neighbourhood& n = nbh_[b];
+                bool need = false;
+                for (int k = 0; k < 27 && !need; ++k) need = n.slot[k] >= 0 && changed[std::size_t(n.slot[k])];
+                if (need) todo.push_back(std::int32_t(b));
+            }
+            std::fill(changed.begin(), changed.end(), std::uint8_t(0));
+            for_blocks(todo, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
+                const Neighbourhood& n = nbh_[std::size_t(b)];
                 float* U = s.at(0);
                 gather(n, u.data(), kHalfWidth, kHalfWidth, U);
                 const std::size_t base = std::size_t(b) * kBlockVoxels;
@@ -467,8 +542,7 @@ private:
         std::vector<std::int32_t> all(nblocks());
         for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
         for_blocks(all, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
-            Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
             gather_phi(n, phi_, P);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
@@ -501,9 +575,8 @@ private:
         const float inv2mu2 = inv2mu2_;
         const SmoothMode emode = cond == Conductance::Live ? SmoothMode::Anisotropic : SmoothMode::Isotropic;
         const float band = opt_.active_band;
-        for_blocks(active_, cond == Conductance::Frozen ? 16 : 13, [&](std::size_t k, std::int32_t b, Scratch& s) {
-            Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+        for_blocks(active_, cond == Conductance::Frozen ? 17 : 14, [&](std::size_t k, std::int32_t b, Scratch& s) {
+            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
             float* N[3] = {s.at(1), s.at(2), s.at(3)};
             float* F[3][3] = {{s.at(4), s.at(5), s.at(6)}, {s.at(7), s.at(8), s.at(9)}, {s.at(10), s.at(11), s.at(12)}};
@@ -516,32 +589,45 @@ private:
                     gather(n, gface_[a].data(), 1.0f, 1.0f, G[a]);
                 }
             }
-            const float* Nc[3] = {N[0], N[1], N[2]};
+            float* K = s.at(cond == Conductance::Frozen ? 16 : 13);  // κ² of the faces of one axis
             const std::size_t base = std::size_t(b) * kBlockVoxels;
             double e = 0.0;
             for (int a = 0; a < 3; ++a) {
                 const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
                 int lo[3] = {0, 0, 0};
                 lo[a] = -1;
+                const int nx = kBlockDim - lo[0];
                 for (int z = lo[2]; z < kBlockDim; ++z)
-                    for (int y = lo[1]; y < kBlockDim; ++y)
-                        for (int x = lo[0]; x < kBlockDim; ++x) {
-                            const int q = lidx(x, y, z);
-                            if (std::abs(P[q]) > band && std::abs(P[q + sa]) > band) {
-                                F[a][0][q] = F[a][1][q] = F[a][2][q] = 0.0f;
-                                continue;
+                    for (int y = lo[1]; y < kBlockDim; ++y) {
+                        const int q0 = lidx(lo[0], y, z);
+                        bool any = false;  // a face of the row touches the band
+                        for (int j = 0; j < nx; ++j)
+                            any |= !(std::abs(P[q0 + j]) > band && std::abs(P[q0 + j + sa]) > band);
+                        // rows outside the band are not computed: the divergence below reads only
+                        // the faces of active samples, which lie in the band
+                        if (!any) continue;
+                        if (cond == Conductance::Frozen)
+                            face_row<true>(P, N[0], N[1], N[2], G[a], q0, nx, sa, sb, sc, band, F[a][0], F[a][1],
+                                           F[a][2], K);
+                        else
+                            face_row<false>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band, F[a][0],
+                                            F[a][1], F[a][2], K);
+                        if (cond == Conductance::Live)
+                            for (int j = 0; j < nx; ++j) {
+                                const int q = q0 + j;
+                                if (std::abs(P[q]) > band && std::abs(P[q + sa]) > band) continue;
+                                const float g = std::exp(-K[q] * inv2mu2);
+                                for (int c = 0; c < 3; ++c) F[a][c][q] = g * F[a][c][q];
                             }
-                            float m[3], k2;
-                            face_terms(P, Nc, q, sa, sb, sc, m, k2);
-                            float g = 1.0f;
-                            if (cond == Conductance::Live) g = std::exp(-k2 * inv2mu2);
-                            else if (cond == Conductance::Frozen) g = G[a][q];
-                            F[a][0][q] = g * m[0];
-                            F[a][1][q] = g * m[1];
-                            F[a][2][q] = g * m[2];
-                            // energy of the faces owned by the active samples of this block
-                            if (x >= 0 && y >= 0 && z >= 0 && mask_[base + std::size_t(bidx(x, y, z))])
-                                e += cond == Conductance::Frozen ? double(g) * k2 : double(penalty(emode, k2, inv2mu2));
+                    }
+                // energy of the faces owned by the active samples of this block (in band: not skipped)
+                for (int z = 0; z < kBlockDim; ++z)
+                    for (int y = 0; y < kBlockDim; ++y)
+                        for (int x = 0; x < kBlockDim; ++x) {
+                            if (!mask_[base + std::size_t(bidx(x, y, z))]) continue;
+                            const int q = lidx(x, y, z);
+                            e += cond == Conductance::Frozen ? double(G[a][q]) * K[q]
+                                                             : double(penalty(emode, K[q], inv2mu2));
                         }
             }
             energy[k] = e;
@@ -590,8 +676,7 @@ private:
         std::vector<std::int32_t> all(nblocks());
         for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
         for_blocks(all, 4, [&](std::size_t, std::int32_t b, Scratch& s) {
-            Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
             float* N[3] = {s.at(1), s.at(2), s.at(3)};
             gather_phi(n, phi_, P);
@@ -673,8 +758,7 @@ private:
             std::vector<std::int32_t> all(nblocks());
             for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
             for_blocks(all, 3, [&](std::size_t, std::int32_t b, Scratch& s) {
-                Neighbourhood n;
-                neighbourhood(std::size_t(b), n);
+                const Neighbourhood& n = nbh_[std::size_t(b)];
                 float* N[3] = {s.at(0), s.at(1), s.at(2)};
                 gather_n(n, n_, N[0], N[1], N[2]);
                 const std::size_t base = std::size_t(b) * kBlockVoxels;
@@ -699,8 +783,7 @@ private:
         }
         const float T = float(opt_.normal_steps) * std::min(opt_.normal_dt, kMaxDt);
         for_blocks(active_, second ? 4 : 3, [&](std::size_t, std::int32_t b, Scratch& s) {
-            Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* N[3] = {s.at(0), s.at(1), s.at(2)};
             gather_n(n, n_, N[0], N[1], N[2]);
             float* Gv = nullptr;
@@ -734,8 +817,7 @@ private:
         std::atomic<bool> bad{false};
         const float dt = std::min(opt_.refit_dt, kMaxDt);
         for_blocks(active_, 1, [&](std::size_t k, std::int32_t b, Scratch& s) {
-            Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
             gather_phi(n, phi_, P);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
@@ -794,8 +876,7 @@ private:
     double refit_energy() {
         std::vector<double> energy(active_.size(), 0.0);
         for_blocks(active_, 1, [&](std::size_t k, std::int32_t b, Scratch& s) {
-            Neighbourhood n;
-            neighbourhood(std::size_t(b), n);
+            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
             gather_phi(n, phi_, P);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
@@ -875,6 +956,8 @@ private:
     std::vector<float> phi_, phi2_, hn_;
     std::vector<float> n_[3], n2_[3], aux_[3], gface_[3];
     std::vector<std::uint8_t> mask_;
+    std::vector<Neighbourhood> nbh_;  // per allocated block, rebuilt when the band moves
+    mutable tbb::enumerable_thread_specific<std::vector<float>> scratch_;
     std::vector<std::int32_t> active_;
     std::size_t active_voxels_ = 0;
 };
