@@ -14,13 +14,18 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/errors.h"
 #include "io/formats/atomic_file.h"
+#include "io/formats/gltf_check.h"
+#include "io/formats/isolate.h"
 
 namespace normalflow {
 
@@ -266,21 +271,42 @@ Mesh read_gltf(const std::string& path, ReadInfo* info) {
     for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
     if (ext == ".glb" && !glb) throw InvalidInput(who + ": not a GLB file (bad magic)");
     if (glb) check_glb(data, who);
+    // Our own structural check first (accessors against buffer views, index ranges, ...): Draco's glTF
+    // reader trusts accessor data and reads out of bounds on malformed files (fuzz finding glb-e1f699a6).
+    const std::string base_dir = std::filesystem::path(path).parent_path().string();
+    if (glb) {
+        const std::uint32_t json_len = le32(data.data() + 12);
+        const std::string_view json(data.data() + 20, json_len);
+        std::optional<std::string_view> bin;
+        const std::size_t bin_at = 20 + std::size_t(json_len);
+        if (data.size() - bin_at >= 8 && le32(data.data() + bin_at + 4) == kChunkBin)
+            bin = std::string_view(data.data() + bin_at + 8, le32(data.data() + bin_at));
+        check_gltf(json, bin, base_dir, who);
+    } else {
+        check_gltf(std::string_view(data.data(), data.size()), std::nullopt, base_dir, who);
+    }
+    // Decode in a forked child so that a crash inside Draco becomes an IoError (io/formats/isolate.h).
     // draco::ReadMeshFromFile runs draco::GltfDecoder::DecodeFromFile (all nodes, transforms applied).
     // (Including draco/io/gltf_decoder.h directly would need tiny_gltf.h, which Debian does not ship
     // with libdraco-dev, and would have to match the copy compiled into libdraco exactly.)
-    std::unique_ptr<draco::Mesh> dm;
-    try {
-        auto res = draco::ReadMeshFromFile(path);
-        if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
-        dm = std::move(res).value();
-    } catch (const InvalidInput&) {
-        throw;
-    } catch (const std::exception& e) {
-        throw InvalidInput(who + ": malformed glTF (" + e.what() + ")");
-    }
-    if (!dm) throw InvalidInput(who + ": no mesh decoded");
-    Mesh m = to_mesh(*dm, who);
+    const std::string bytes = run_isolated(who, [&] {
+        std::unique_ptr<draco::Mesh> dm;
+        try {
+            auto res = draco::ReadMeshFromFile(path);
+            if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
+            dm = std::move(res).value();
+        } catch (const InvalidInput&) {
+            throw;
+        } catch (const std::exception& e) {
+            throw InvalidInput(who + ": malformed glTF (" + e.what() + ")");
+        }
+        if (!dm) throw InvalidInput(who + ": no mesh decoded");
+        ByteWriter w;
+        put_mesh(w, to_mesh(*dm, who));
+        return w.take();
+    });
+    ByteReader r(bytes, who);
+    Mesh m = get_mesh(r);
     if (info) {
         info->format = glb ? "glb" : "gltf";
         info->file_vertices = m.positions.size();
@@ -294,16 +320,24 @@ Mesh read_drc(const std::string& path, ReadInfo* info) {
     const std::vector<char> data = read_all(path, "read_drc");
     if (data.size() < 5 || std::memcmp(data.data(), "DRACO", 5) != 0)
         throw InvalidInput(who + ": not a Draco file (expected magic \"DRACO\")");
-    draco::DecoderBuffer buf;
-    buf.Init(data.data(), data.size());
-    auto type = draco::Decoder::GetEncodedGeometryType(&buf);
-    if (!type.ok()) throw InvalidInput(who + ": " + type.status().error_msg_string());
-    if (type.value() != draco::TRIANGULAR_MESH) throw InvalidInput(who + ": not a triangle mesh (point cloud?)");
-    draco::Decoder dec;
-    auto res = dec.DecodeMeshFromBuffer(&buf);
-    if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
-    const std::unique_ptr<draco::Mesh> dm = std::move(res).value();
-    Mesh m = to_mesh(*dm, who);
+    // Decode in a forked child so that a crash or undefined behaviour inside Draco on a corrupt
+    // bitstream becomes an IoError (fuzz finding drc-80305ea1; io/formats/isolate.h).
+    const std::string bytes = run_isolated(who, [&] {
+        draco::DecoderBuffer buf;
+        buf.Init(data.data(), data.size());
+        auto type = draco::Decoder::GetEncodedGeometryType(&buf);
+        if (!type.ok()) throw InvalidInput(who + ": " + type.status().error_msg_string());
+        if (type.value() != draco::TRIANGULAR_MESH) throw InvalidInput(who + ": not a triangle mesh (point cloud?)");
+        draco::Decoder dec;
+        auto res = dec.DecodeMeshFromBuffer(&buf);
+        if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
+        const std::unique_ptr<draco::Mesh> dm = std::move(res).value();
+        ByteWriter w;
+        put_mesh(w, to_mesh(*dm, who));
+        return w.take();
+    });
+    ByteReader r(bytes, who);
+    Mesh m = get_mesh(r);
     if (info) {
         info->format = "drc";
         info->file_vertices = m.positions.size();

@@ -33,14 +33,17 @@ struct DracoOptions {
 /// \param info  optional: format ("gltf"/"glb"), file_vertices (points after merging), file_faces
 /// \throw IoError if the file cannot be opened or read; InvalidInput naming the file for anything
 ///        else: truncated or garbage files, non-triangle primitives, missing buffers, no triangles,
-///        non-finite positions.
-/// Cost: linear in the file size. Single-threaded.
+///        non-finite positions, and anything io/formats/gltf_check.h refuses (accessors outside their
+///        buffer views, buffer views outside their buffers, indices past the last point, ...);
+///        IoError if Draco crashes on the file (it decodes in a forked child, io/formats/isolate.h).
+/// Cost: linear in the file size, plus one fork(). Single-threaded.
 Mesh read_gltf(const std::string& path, ReadInfo* info = nullptr);
 
 /// Reads a Draco (.drc) triangle mesh: POSITION only, dequantized to float.
 /// \param info  optional: format "drc", file_vertices, file_faces
 /// \throw IoError if the file cannot be opened or read; InvalidInput naming the file for truncated or
-///        garbage data, point clouds (no faces), a missing POSITION attribute, non-finite positions.
+///        garbage data, point clouds (no faces), a missing POSITION attribute, non-finite positions;
+///        IoError if Draco crashes on the file (it decodes in a forked child, io/formats/isolate.h).
 Mesh read_drc(const std::string& path, ReadInfo* info = nullptr);
 
 /// Writes m as a Draco (.drc) bitstream (edgebreaker connectivity coding, falling back to sequential

@@ -1,20 +1,31 @@
 #include "io/openvdb/vdb_io.h"
 
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/LevelSetRebuild.h>
 #include <openvdb/tools/Prune.h>
+#include <openvdb/tree/ValueAccessor.h>
 
+#include <array>
 #include <cerrno>
+#include <cstdint>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
+#include <fstream>
+#include <new>
 #include <mutex>
 #include <string>
+#include <vector>
+
+#include <sys/resource.h>
 
 #include "core/errors.h"
 #include "io/formats/atomic_file.h"
+#include "io/formats/isolate.h"
 
 namespace normalflow {
 
@@ -37,35 +48,35 @@ openvdb::FloatGrid::Ptr read_first_float_grid(const std::string& path, const std
         if (c == EOF) throw InvalidInput(who + ": empty file");
     }
     try {
-        openvdb::io::File file(path);
-        file.open(/*delayLoad=*/false);
+        // Read through our own stream with exceptions on: the first read past the end of a truncated
+        // or corrupt file throws at once. (io::File's own stream does not, and OpenVDB then keeps
+        // going with stale length fields: a 4 KB fuzz input looped through gigabytes of allocations.)
+        std::ifstream in(path, std::ios::binary);
+        if (!in) throw IoError(who + ": cannot open (" + std::strerror(errno) + ")");
+        in.exceptions(std::ios::failbit | std::ios::badbit);
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
         openvdb::GridBase::Ptr found;
-        for (auto it = file.beginName(); it != file.endName(); ++it) {
-            const openvdb::GridBase::ConstPtr meta = file.readGridMetadata(it.gridName());
-            if (meta && meta->isType<openvdb::FloatGrid>()) {
-                found = file.readGrid(it.gridName());
-                break;
-            }
-        }
-        file.close();
+        if (const openvdb::GridPtrVecPtr grids = stream.getGrids())
+            for (const openvdb::GridBase::Ptr& g : *grids)
+                if (g && g->isType<openvdb::FloatGrid>()) {
+                    found = g;
+                    break;
+                }
         if (!found) throw InvalidInput(who + ": no float grid in the file");
         return openvdb::gridPtrCast<openvdb::FloatGrid>(found);
     } catch (const InvalidInput&) {
         throw;
+    } catch (const IoError&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throw;  // the caller says how much was allowed
     } catch (const std::exception& e) {
         throw InvalidInput(who + ": not a valid VDB file (" + e.what() + ")");
     }
 }
 
-}  // namespace
-
-Volume read_vdb(const std::string& path) {
-    init_openvdb();
-    const std::string who = "read_vdb: " + path;
-    openvdb::FloatGrid::Ptr grid = read_first_float_grid(path, who);
-
-    // Transform: linear, axis-aligned, uniform positive scale.
-    const openvdb::math::Transform& xf = grid->transform();
+/// Checks that xf is linear, axis-aligned, with a uniform positive scale; returns the scale h.
+double check_transform(const openvdb::math::Transform& xf, const std::string& who) {
     if (!xf.isLinear()) throw InvalidInput(who + ": grid transform is not linear");
     const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
     const double h = (xf.indexToWorld(openvdb::Vec3d(1, 0, 0)) - o)[0];
@@ -82,6 +93,170 @@ Volume read_vdb(const std::string& path) {
                                    std::to_string(d[1]) + ", " + std::to_string(d[2]) + "))");
         }
     }
+    if (!is_finite(Vec3d{o[0], o[1], o[2]})) throw InvalidInput(who + ": grid transform has a non-finite origin");
+    return h;
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+constexpr bool kAddressSanitizer = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+constexpr bool kAddressSanitizer = true;
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+#else
+constexpr bool kAddressSanitizer = false;
+#endif
+
+/// Bytes of this process's data segment and private mappings (VmData), 0 if unknown.
+std::uint64_t data_segment_bytes() {
+    std::ifstream in("/proc/self/status");
+    std::string key;
+    while (in >> key) {
+        if (key == "VmData:") {
+            std::uint64_t kib = 0;
+            in >> kib;
+            return kib * 1024;
+        }
+        in.ignore(1 << 20, '\n');
+    }
+    return 0;
+}
+
+/// Caps the heap of the isolated child that reads a .vdb. A corrupt file can state a string length of
+/// gigabytes, which OpenVDB allocates before it notices that the file is short (a 4 KB fuzz input made
+/// it take 5 GB and 26 s); no real file of `file_bytes` bytes needs more than about 64 times its size
+/// plus the tree's fixed node overhead. Skipped under AddressSanitizer, whose shadow memory the limit
+/// would count.
+std::uint64_t cap_child_heap(std::uint64_t file_bytes) {
+    if (kAddressSanitizer) return 0;
+    const std::uint64_t limit = data_segment_bytes() + (std::uint64_t(512) << 20) + 64 * file_bytes;
+    const rlimit rl{limit, limit};
+    return setrlimit(RLIMIT_DATA, &rl) == 0 ? limit : 0;
+}
+
+using LeafT = openvdb::FloatTree::LeafNodeType;
+
+/// One tile of the tree above the leaves (level 1..3), as the child ships it.
+struct Tile {
+    std::int32_t level, x, y, z;
+    float value;
+    std::uint32_t active;
+};
+
+/// Reads the first float grid of the file in a forked child (io/formats/isolate.h), so that a crash or
+/// undefined behaviour inside OpenVDB's reader on a corrupt file becomes an IoError (fuzz finding
+/// vdb-9f74bbba), and rebuilds it here from plain arrays: transform (checked in the child), class,
+/// background, normalflow_dims metadata, tiles that differ from inactive background, and leaves.
+/// The child runs single-threaded code only (file reading and iteration, no TBB algorithms).
+/// (A grid that fails half-way through reading is freed in the child; Tree::clear then runs a
+/// tbb::parallel_for there, which the calling thread completes alone.)
+openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::string& who) {
+    const std::string bytes = run_isolated(who, [&] {
+        // Deliberately never freed: the child ends with _exit, and Tree's destructor frees nodes with
+        // tbb::parallel_for, which must not run in a forked child.
+        std::error_code ec;
+        const std::uint64_t cap = isolation_disabled() ? 0 : cap_child_heap(std::filesystem::file_size(path, ec));
+        const openvdb::FloatGrid::Ptr* keep = nullptr;
+        try {
+            keep = new openvdb::FloatGrid::Ptr(read_first_float_grid(path, who));
+        } catch (const std::bad_alloc&) {
+            if (cap == 0) throw;
+            throw InvalidInput(who + ": not a valid VDB file (reading it needs more than " +
+                               std::to_string(cap >> 20) + " MiB, far more than a file of this size can hold)");
+        }
+        const openvdb::FloatGrid::Ptr& grid = *keep;
+        const openvdb::math::Transform& xf = grid->transform();
+        const double h = check_transform(xf, who);
+        const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
+        ByteWriter w;
+        w.put(h);
+        w.put(Vec3d{o[0], o[1], o[2]});
+        w.put(std::int32_t(grid->getGridClass()));
+        const float background = grid->background();
+        w.put(background);
+        openvdb::Vec3i dims(0, 0, 0);
+        if (const auto meta = grid->getMetadata<openvdb::Vec3IMetadata>(kDimsKey)) dims = meta->value();
+        w.put(std::array<std::int32_t, 3>{dims[0], dims[1], dims[2]});
+        std::vector<Tile> tiles;
+        auto it = grid->tree().cbeginValueAll();
+        it.setMaxDepth(openvdb::FloatTree::ValueAllCIter::LEAF_DEPTH - 1);  // tiles only, no leaf voxels
+        for (; it; ++it) {
+            const bool on = it.isValueOn();
+            const float v = *it;
+            if (!on && (v == background || (std::isnan(v) && std::isnan(background)))) continue;
+            const openvdb::Coord c = it.getCoord();
+            tiles.push_back({std::int32_t(it.getLevel()), c[0], c[1], c[2], v, on ? 1u : 0u});
+        }
+        w.put_array(tiles);
+        std::vector<std::array<std::int32_t, 3>> origins;
+        std::vector<float> values;
+        std::vector<std::uint64_t> masks;
+        for (auto leaf = grid->tree().cbeginLeaf(); leaf; ++leaf) {
+            const openvdb::Coord c = leaf->origin();
+            origins.push_back({c[0], c[1], c[2]});
+            const float* v = leaf->buffer().data();
+            if (!v) throw InvalidInput(who + ": a leaf has no data");
+            values.insert(values.end(), v, v + LeafT::SIZE);
+            const auto& mask = leaf->getValueMask();
+            for (openvdb::Index word = 0; word < LeafT::NodeMaskType::WORD_COUNT; ++word)
+                masks.push_back(mask.template getWord<std::uint64_t>(word));
+        }
+        w.put_array(origins);
+        w.put_array(values);
+        w.put_array(masks);
+        return w.take();
+    });
+
+    ByteReader r(bytes, who);
+    const auto h = r.get<double>();
+    const auto o = r.get<Vec3d>();
+    const auto cls = r.get<std::int32_t>();
+    const auto background = r.get<float>();
+    const auto dims = r.get<std::array<std::int32_t, 3>>();
+    const auto tiles = r.get_array<Tile>();
+    const auto origins = r.get_array<std::array<std::int32_t, 3>>();
+    const auto values = r.get_array<float>();
+    const auto masks = r.get_array<std::uint64_t>();
+    constexpr std::size_t kWords = LeafT::NodeMaskType::WORD_COUNT;
+    if (values.size() != origins.size() * LeafT::SIZE || masks.size() != origins.size() * kWords)
+        throw IoError(who + ": the isolated process sent inconsistent leaf data");
+
+    openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(background);
+    openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(h);
+    xf->postTranslate(openvdb::Vec3d(o[0], o[1], o[2]));
+    grid->setTransform(xf);
+    grid->setGridClass(cls >= 0 && cls < openvdb::NUM_GRID_CLASSES ? openvdb::GridClass(cls) : openvdb::GRID_UNKNOWN);
+    if (dims[0] != 0 || dims[1] != 0 || dims[2] != 0)
+        grid->insertMeta(kDimsKey, openvdb::Vec3IMetadata(openvdb::Vec3i(dims[0], dims[1], dims[2])));
+    auto& tree = grid->tree();
+    for (const Tile& t : tiles) {
+        if (t.level < 1 || t.level > int(openvdb::FloatTree::RootNodeType::LEVEL))
+            throw IoError(who + ": the isolated process sent a tile at level " + std::to_string(t.level));
+        tree.addTile(openvdb::Index(t.level), openvdb::Coord(t.x, t.y, t.z), t.value, t.active != 0);
+    }
+    for (std::size_t l = 0; l < origins.size(); ++l) {
+        LeafT* leaf = tree.touchLeaf(openvdb::Coord(origins[l][0], origins[l][1], origins[l][2]));
+        LeafT::NodeMaskType mask;
+        for (openvdb::Index n = 0; n < LeafT::SIZE; ++n) {
+            leaf->setValueOnly(n, values[l * LeafT::SIZE + n]);
+            if ((masks[l * kWords + n / 64] >> (n % 64)) & 1u) mask.setOn(n);
+        }
+        leaf->setValueMask(mask);
+    }
+    return grid;
+}
+
+}  // namespace
+
+Volume read_vdb(const std::string& path) {
+    init_openvdb();
+    const std::string who = "read_vdb: " + path;
+    openvdb::FloatGrid::Ptr grid = read_grid_isolated(path, who);
+    // A copy: the fog branch below replaces grid. Checked in the child: linear, uniform scale h.
+    const openvdb::math::Transform xf = grid->transform();
+    const double h = xf.voxelSize()[0];
 
     try {
         if (grid->getGridClass() == openvdb::GRID_FOG_VOLUME) {
@@ -153,7 +328,10 @@ Volume read_vdb(const std::string& path) {
             dst[Volume::local_index(l[0], l[1], l[2])] = x;
         }
     }
-    const auto acc = grid->getConstAccessor();
+    // An unregistered accessor (IsSafe = false): registering one in the tree's accessor registry makes
+    // the tree's destructor iterate oneTBB's concurrent_hash_map, whose iterator has undefined
+    // behaviour (misaligned downcast of its rehash flag; oneTBB issues #908, #1601) that UBSan reports.
+    const openvdb::tree::ValueAccessor<const openvdb::FloatTree, /*IsSafe=*/false> acc(grid->tree());
     for (int bk = 0; bk < vol.block_dims[2]; ++bk)
         for (int bj = 0; bj < vol.block_dims[1]; ++bj)
             for (int bi = 0; bi < vol.block_dims[0]; ++bi) {
