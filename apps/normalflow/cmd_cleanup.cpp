@@ -17,6 +17,7 @@ struct CleanupArgs {
     std::string input, output;
     std::size_t target_faces = 0;
     double max_error = 0.0, edge_length = 0.0, min_component = 0.0;
+    bool no_repair = false;
     OutputFlags out;
 };
 
@@ -29,6 +30,7 @@ int run_cleanup(const CleanupArgs& a) {
     Mesh m = read_mesh(a.input);
     cgal::CleanupOptions o;
     o.min_component_fraction = a.min_component;
+    o.repair_self_intersections = !a.no_repair;
     if (a.target_faces > 0) { o.reduction = cgal::CleanupReduction::FaceCount; o.target_faces = a.target_faces; }
     if (a.max_error > 0) { o.reduction = cgal::CleanupReduction::ErrorBound; o.max_error = a.max_error; }
     if (a.edge_length > 0) { o.reduction = cgal::CleanupReduction::Remesh; o.target_edge_length = a.edge_length; }
@@ -42,13 +44,15 @@ int run_cleanup(const CleanupArgs& a) {
             .set("components_reversed", r.components_reversed).set("hausdorff", r.hausdorff)
             .set("result_to_input", r.result_to_input).set("input_to_result", r.input_to_result)
             .set("closed", r.closed).set("manifold", r.manifold).set("self_intersections", r.self_intersections)
+            .set("self_intersections_found", r.self_intersections_found)
             .set("seconds", r.seconds).set("warnings", Json::array(r.warnings));
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {
-        std::printf("cleanup: %s -> %s: %zu -> %zu faces, Hausdorff %.6g, %s, %s, %zu self-intersections (%.2f s)\n",
+        std::printf("cleanup: %s -> %s: %zu -> %zu faces, Hausdorff %.6g, %s, %s, %zu self-intersections (%zu before "
+                    "repair) (%.2f s)\n",
                     a.input.c_str(), a.output.c_str(), r.faces_before, r.faces_after, r.hausdorff,
                     r.closed ? "closed" : "OPEN", r.manifold ? "manifold" : "NON-MANIFOLD", r.self_intersections,
-                    r.seconds);
+                    r.self_intersections_found, r.seconds);
         for (const auto& w : r.warnings) std::fprintf(stderr, "cleanup: warning: %s\n", w.c_str());
     }
     return 0;
@@ -72,6 +76,7 @@ void add_cleanup_command(CLI::App& app) {
         ->check(CLI::PositiveNumber);
     cmd->add_option("--min-component", a->min_component, "drop components below this fraction of the faces")
         ->check(CLI::Range(0.0, 0.999999));
+    cmd->add_flag("--no-repair", a->no_repair, "do not repair self-intersecting faces (only report them)");
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_cleanup);
 }

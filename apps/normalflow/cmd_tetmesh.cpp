@@ -1,4 +1,4 @@
-// normalflow tetmesh IN OUT.(mesh|vtu|node) [--quality 1.414] [--max-volume V]
+// normalflow tetmesh IN OUT.(mesh|vtu|node) [--quality 1.414] [--min-dihedral 10] [--optimize 2] [--max-volume V]
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -16,6 +16,8 @@ namespace {
 struct TetmeshArgs {
     std::string input, output;
     double quality = 1.414, max_volume = 0.0;
+    double min_dihedral = 10.0;  // TetmeshOptions defaults (the header is absent in builds without TetGen)
+    int optimize = 2;
     OutputFlags out;
 };
 
@@ -25,6 +27,8 @@ int run_tetmesh(const TetmeshArgs& a) {
     TetmeshOptions o;
     o.radius_edge = a.quality;
     o.max_volume = a.max_volume;
+    o.min_dihedral_deg = a.min_dihedral;
+    o.optimize_level = a.optimize;
     TetmeshReport r;
     const TetMesh t = tetrahedralize(m, o, &r);
     write_tetmesh(a.output, t);
@@ -55,6 +59,13 @@ void add_tetmesh_command(CLI::App& app) {
     cmd->add_option("IN", a->input, "closed, manifold, self-intersection-free surface")->required();
     cmd->add_option("OUT", a->output, "output .mesh (Medit), .vtu (VTK) or .node (+ .ele)")->required();
     cmd->add_option("--quality", a->quality, "radius-edge ratio bound (>= 1)")->capture_default_str();
+    cmd->add_option("--min-dihedral", a->min_dihedral,
+                    "smallest dihedral angle TetGen aims for, degrees (0 = none; tried, not guaranteed)")
+        ->check(CLI::Range(0.0, 69.999))
+        ->capture_default_str();
+    cmd->add_option("--optimize", a->optimize, "TetGen mesh optimisation level 0..10")
+        ->check(CLI::Range(0, 10))
+        ->capture_default_str();
     cmd->add_option("--max-volume", a->max_volume, "largest tetrahedron volume, world units^3 (0 = none)");
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_tetmesh);

@@ -15,6 +15,7 @@
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "io/formats/atomic_file.h"
+#include "io/formats/isolate.h"
 #ifdef NORMALFLOW_TETGEN_HAS_CGAL
 #include "io/cgal/repair.h"
 #endif
@@ -69,6 +70,11 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
         throw InvalidInput("tetrahedralize: radius_edge must be >= 1, got " + std::to_string(opt.radius_edge));
     if (!(opt.max_volume >= 0.0) || !std::isfinite(opt.max_volume))
         throw InvalidInput("tetrahedralize: max_volume must be >= 0");
+    if (!(opt.min_dihedral_deg >= 0.0 && opt.min_dihedral_deg < 70.0))
+        throw InvalidInput("tetrahedralize: min_dihedral_deg must be in [0, 70), got " +
+                           std::to_string(opt.min_dihedral_deg));
+    if (opt.optimize_level < 0 || opt.optimize_level > 10)
+        throw InvalidInput("tetrahedralize: optimize_level must be in 0..10, got " + std::to_string(opt.optimize_level));
     validate(m_in);
     const Mesh m = weld_exact(m_in);
 
@@ -92,23 +98,39 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
         for (int k = 0; k < 3; ++k) fc.polygonlist[0].vertexlist[k] = static_cast<int>(m.triangles[f][k]);
     }
     char sw[128];
-    if (opt.max_volume > 0) std::snprintf(sw, sizeof sw, "pzq%.6ga%.9gQ", opt.radius_edge, opt.max_volume);
-    else std::snprintf(sw, sizeof sw, "pzq%.6gQ", opt.radius_edge);
-    try {
-        ::tetrahedralize(sw, &in, &out);
-    } catch (...) {
-        throw NumericalError("tetrahedralize: TetGen failed on the surface");
-    }
-    if (out.numberoftetrahedra <= 0) throw NumericalError("tetrahedralize: TetGen produced no tetrahedra");
-
+    if (opt.max_volume > 0)
+        std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%da%.9gQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level,
+                      opt.max_volume);
+    else std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%dQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level);
+    // TetGen runs in a forked child (io/formats/isolate.h): a crash on its error paths becomes an
+    // IoError instead of ending the process. TetGen is single-threaded, as the child requires.
+    const std::string bytes = run_isolated("tetrahedralize", [&] {
+        try {
+            ::tetrahedralize(sw, &in, &out);
+        } catch (...) {
+            throw NumericalError("tetrahedralize: TetGen failed on the surface");
+        }
+        if (out.numberoftetrahedra <= 0) throw NumericalError("tetrahedralize: TetGen produced no tetrahedra");
+        TetMesh tm;
+        tm.points.resize(static_cast<std::size_t>(out.numberofpoints));
+        for (std::size_t i = 0; i < tm.points.size(); ++i)
+            tm.points[i] = Vec3d{out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]};
+        const int nc = out.numberofcorners;  // 4 (no second-order nodes requested)
+        tm.tets.resize(static_cast<std::size_t>(out.numberoftetrahedra));
+        for (std::size_t i = 0; i < tm.tets.size(); ++i)
+            for (int k = 0; k < 4; ++k) tm.tets[i][k] = static_cast<std::uint32_t>(out.tetrahedronlist[nc * i + k]);
+        ByteWriter w;
+        w.put_array(tm.points);
+        w.put_array(tm.tets);
+        return w.take();
+    });
+    ByteReader reader(bytes, "tetrahedralize");
     TetMesh t;
-    t.points.resize(static_cast<std::size_t>(out.numberofpoints));
-    for (std::size_t i = 0; i < t.points.size(); ++i)
-        t.points[i] = Vec3d{out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]};
-    const int nc = out.numberofcorners;  // 4 (no second-order nodes requested)
-    t.tets.resize(static_cast<std::size_t>(out.numberoftetrahedra));
-    for (std::size_t i = 0; i < t.tets.size(); ++i)
-        for (int k = 0; k < 4; ++k) t.tets[i][k] = static_cast<std::uint32_t>(out.tetrahedronlist[nc * i + k]);
+    t.points = reader.get_array<Vec3d>();
+    t.tets = reader.get_array<std::array<std::uint32_t, 4>>();
+    for (const auto& tt : t.tets)
+        for (std::uint32_t v : tt)
+            if (v >= t.points.size()) throw NumericalError("tetrahedralize: TetGen returned a tetrahedron index out of range");
 
     if (report) {
         TetmeshReport r;

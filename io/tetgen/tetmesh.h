@@ -16,6 +16,13 @@ namespace normalflow {
 struct TetmeshOptions {
     double radius_edge = 1.414;  ///< quality bound: largest radius-edge ratio (TetGen -q), >= 1.0 (1.414 default)
     double max_volume = 0.0;     ///< largest tetrahedron volume, world units cubed (TetGen -a); 0 = no bound
+    /// Smallest dihedral angle TetGen's refinement aims for, degrees (TetGen -q<radius_edge>/<deg>), in
+    /// [0, 70); 0 = no dihedral bound (radius-edge only, which leaves slivers). TetGen tries but does not
+    /// guarantee it (tetrahedra at the input surface keep the angles the surface dictates).
+    double min_dihedral_deg = 10.0;
+    /// TetGen's mesh optimisation level (-O<level>; flips and vertex smoothing that raise the smallest
+    /// dihedral angle), 0 (none) .. 10; TetGen's default is 2.
+    int optimize_level = 2;
 };
 
 /// A tetrahedral mesh: points and tetrahedra (4 point indices, positive orientation as TetGen writes).
@@ -34,8 +41,8 @@ struct TetmeshReport {
     double seconds = 0.0;
 };
 
-/// Tetrahedralizes the volume enclosed by the closed surface m (TetGen switches "pzq<radius_edge>Q",
-/// plus "a<max_volume>" when set). The surface is validated BEFORE TetGen sees it (TetGen 1.5 crashes
+/// Tetrahedralizes the volume enclosed by the closed surface m (TetGen switches
+/// "pzq<radius_edge>/<min_dihedral_deg>O<optimize_level>Q", plus "a<max_volume>" when set). The surface is validated BEFORE TetGen sees it (TetGen 1.5 crashes
 /// on its own error path): it must be closed, manifold, free of degenerate faces and, in builds with
 /// CGAL, free of self-intersections.
 /// \throw InvalidInput for an empty, open, non-manifold, degenerate or self-intersecting surface, or
