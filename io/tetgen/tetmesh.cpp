@@ -78,7 +78,7 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
     validate(m_in);
     const Mesh m = weld_exact(m_in);
 
-    tetgenio in, out;
+    tetgenio in;
     in.firstnumber = 0;
     in.numberofpoints = static_cast<int>(m.positions.size());
     in.pointlist = new REAL[3 * m.positions.size()];
@@ -104,26 +104,46 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
     else std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%dQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level);
     // TetGen runs in a forked child (io/formats/isolate.h): a crash on its error paths becomes an
     // IoError instead of ending the process. TetGen is single-threaded, as the child requires.
-    const std::string bytes = run_isolated("tetrahedralize", [&] {
-        try {
-            ::tetrahedralize(sw, &in, &out);
-        } catch (...) {
-            throw NumericalError("tetrahedralize: TetGen failed on the surface");
-        }
-        if (out.numberoftetrahedra <= 0) throw NumericalError("tetrahedralize: TetGen produced no tetrahedra");
-        TetMesh tm;
-        tm.points.resize(static_cast<std::size_t>(out.numberofpoints));
-        for (std::size_t i = 0; i < tm.points.size(); ++i)
-            tm.points[i] = Vec3d{out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]};
-        const int nc = out.numberofcorners;  // 4 (no second-order nodes requested)
-        tm.tets.resize(static_cast<std::size_t>(out.numberoftetrahedra));
-        for (std::size_t i = 0; i < tm.tets.size(); ++i)
-            for (int k = 0; k < 4; ++k) tm.tets[i][k] = static_cast<std::uint32_t>(out.tetrahedronlist[nc * i + k]);
-        ByteWriter w;
-        w.put_array(tm.points);
-        w.put_array(tm.tets);
-        return w.take();
-    });
+    const auto run = [&](const std::string& switches) {
+        return run_isolated("tetrahedralize", [&] {
+            tetgenio out;
+            try {
+                ::tetrahedralize(const_cast<char*>(switches.c_str()), &in, &out);
+            } catch (...) {
+                throw NumericalError("tetrahedralize: TetGen failed on the surface");
+            }
+            if (out.numberoftetrahedra <= 0) throw NumericalError("tetrahedralize: TetGen produced no tetrahedra");
+            TetMesh tm;
+            tm.points.resize(static_cast<std::size_t>(out.numberofpoints));
+            for (std::size_t i = 0; i < tm.points.size(); ++i)
+                tm.points[i] = Vec3d{out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]};
+            const int nc = out.numberofcorners;  // 4 (no second-order nodes requested)
+            tm.tets.resize(static_cast<std::size_t>(out.numberoftetrahedra));
+            for (std::size_t i = 0; i < tm.tets.size(); ++i)
+                for (int k = 0; k < 4; ++k) tm.tets[i][k] = static_cast<std::uint32_t>(out.tetrahedronlist[nc * i + k]);
+            ByteWriter w;
+            w.put_array(tm.points);
+            w.put_array(tm.tets);
+            return w.take();
+        });
+    };
+    // TetGen 1.5.0 merges adjacent faces within 0.1 degrees of coplanar (its facet_ang_tol 179.9) into
+    // one facet. Surfaces extracted from a volume have thousands of such nearly, not exactly, coplanar
+    // pairs; recovering the non-planar merged facets aborts in fillcavity ("searchtet.tet !=
+    // midface->tet") or crashes (fandisk at 287k and 10k faces, a sphere at 461k). On such a failure
+    // the second run adds Y: the input triangles stay the boundary faces, unsplit and unmerged, and
+    // the run succeeds; -a (max_volume) is then honoured only away from the surface.
+    std::string used = sw;
+    std::string bytes;
+    try {
+        bytes = run(used);
+    } catch (const NumericalError&) {
+        used.insert(2, "Y");
+        bytes = run(used);
+    } catch (const IoError&) {
+        used.insert(2, "Y");
+        bytes = run(used);
+    }
     ByteReader reader(bytes, "tetrahedralize");
     TetMesh t;
     t.points = reader.get_array<Vec3d>();
@@ -145,6 +165,7 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
         r.volume = vol;
         r.min_dihedral_deg = mind * 180.0 / 3.14159265358979323846;
         r.surface_volume = mesh_report(m).volume;
+        r.switches = used;
         r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         *report = r;
     }

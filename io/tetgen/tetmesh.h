@@ -38,13 +38,17 @@ struct TetmeshReport {
     double min_dihedral_deg = 0.0;  ///< smallest dihedral angle over all tetrahedra, degrees
     double volume = 0.0;            ///< sum of tetrahedron volumes, world units cubed
     double surface_volume = 0.0;    ///< volume enclosed by the input surface (divergence theorem)
+    std::string switches;           ///< the TetGen switches of the run that succeeded ("pzYq..." after a retry)
     double seconds = 0.0;
 };
 
 /// Tetrahedralizes the volume enclosed by the closed surface m (TetGen switches
-/// "pzq<radius_edge>/<min_dihedral_deg>O<optimize_level>Q", plus "a<max_volume>" when set). The surface is validated BEFORE TetGen sees it (TetGen 1.5 crashes
-/// on its own error path): it must be closed, manifold, free of degenerate faces and, in builds with
-/// CGAL, free of self-intersections.
+/// "pzq<radius_edge>/<min_dihedral_deg>O<optimize_level>Q", plus "a<max_volume>" when set). When that
+/// run fails (TetGen 1.5.0 aborts on nearly coplanar adjacent faces, which extracted surfaces have by
+/// the thousand), it runs again with "Y" added ("pzYq..."): the input triangles are kept as the
+/// boundary faces, and max_volume then bounds only tetrahedra that can be split without touching them.
+/// The surface is validated BEFORE TetGen sees it (TetGen 1.5 crashes on its own error path): it must
+/// be closed, manifold, free of degenerate faces and, in builds with CGAL, free of self-intersections.
 /// \throw InvalidInput for an empty, open, non-manifold, degenerate or self-intersecting surface, or
 ///        options out of range; NumericalError if TetGen produces no tetrahedra.
 /// Cost: TetGen's Delaunay refinement, about 0.3 s for 36k tetrahedra. Single-threaded.

@@ -11,12 +11,14 @@
 #include "../sdf/sdf_test_meshes.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
+#include "extract/extract_surface.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #include "io/draco/draco_io.h"
 #include "io/formats/gltf.h"
 #include "io/io.h"
 #include "io/tetgen/tetmesh.h"
+#include "sdf/scan_convert.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -203,6 +205,28 @@ TEST(Output, NormalflowSurfaceFromRealModel) {
         tetrahedralize(m, {}, &tr);
         EXPECT_NEAR(tr.volume, tr.surface_volume, 0.01 * tr.surface_volume);
     }
+}
+
+// Issue 5: TetGen 1.5.0 with "pzq..." aborts in fillcavity (Assertion `searchtet.tet != midface->tet')
+// on surfaces extract_surface produces: it merges nearly (not exactly) coplanar adjacent faces into
+// non-planar facets. tetrahedralize retries with Y (surface kept as given), which meshes them.
+TEST(Tetmesh, MeshesAnExtractedAndDecimatedSurface) {
+    const fs::path f = fs::path(NORMALFLOW_TEST_DATA) / "pairs_gnf" / "fandisk_gt.ply";
+    if (!fs::exists(f)) GTEST_SKIP() << "shared/data missing";
+    const Mesh gt = read_mesh(f.string());
+    ScanConvertOptions so;
+    so.resolution = 128;
+    const Volume v = scan_convert(gt, *make_bvh_query(gt), so);
+    Mesh m = extract_surface(v);
+    cgal::CleanupOptions o;
+    o.reduction = cgal::CleanupReduction::FaceCount;
+    o.target_faces = 10000;
+    const auto cr = cgal::cleanup_mesh(m, o);
+    ASSERT_TRUE(cr.closed && cr.manifold && cr.self_intersections == 0);
+    TetmeshReport tr;
+    tetrahedralize(m, {}, &tr);  // threw IoError (TetGen's SIGABRT in the isolated process) before the retry
+    EXPECT_NEAR(tr.volume, tr.surface_volume, 1e-6 * tr.surface_volume);
+    EXPECT_NE(tr.switches.find('Y'), std::string::npos) << tr.switches;  // measured: the first run fails
 }
 
 // --- issue 5 follow-ups: dihedral bound, fast error bound, self-intersection repair, remeshing ---
