@@ -439,7 +439,8 @@ void NrrdReader::read_samples(double* dst, std::size_t count) {
         }
     }
     for (std::size_t i = 0; i < count; ++i)
-        if (!std::isfinite(dst[i])) bad("sample " + std::to_string(samples_read_ + i) + " is not finite (NaN or Inf)");
+        if (!(std::abs(dst[i]) <= std::numeric_limits<float>::max()))  // NaN, Inf, or a double beyond float
+            bad("sample " + std::to_string(samples_read_ + i) + " is not finite as a float (NaN, Inf or beyond 3.4e38)");
     samples_read_ += count;
 }
 
@@ -466,14 +467,17 @@ Volume NrrdReader::read() {
         half_width = 3.f;
         if (const auto it = keys_.find("normalflow_half_width"); it != keys_.end()) {
             const auto v = parse_numbers(it->second, 1, "normalflow_half_width");
-            if (!(v[0] > 0)) bad("normalflow_half_width must be > 0");
+            if (!(v[0] > 0) || !(v[0] <= std::numeric_limits<float>::max()))
+                bad("normalflow_half_width must be > 0 and fit in a float");
             half_width = float(v[0]);
         }
     }
     Volume vol(g, half_width);
     if (const auto it = keys_.find("normalflow_background"); it != keys_.end()) {
         const auto v = parse_numbers(it->second, 1, "normalflow_background");
-        if (!(v[0] > 0)) bad("normalflow_background must be > 0");
+        // Checked against the float range: a finite double such as 2e128 would become +Inf as a float.
+        if (!(v[0] > 0) || !(v[0] <= std::numeric_limits<float>::max()))
+            bad("normalflow_background must be > 0 and fit in a float");
         vol.background = float(v[0]);
     }
     const double band = double(half_width) * g.voxel_size;
