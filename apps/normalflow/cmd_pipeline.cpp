@@ -55,6 +55,7 @@ struct SmoothArgs {
     float mu = SmoothOptions{}.mu;                    ///< 1/voxel, anisotropic conductance scale
     float alpha = SmoothOptions{}.alpha;              ///< high-boost amount
     int presmooth = -1;                ///< conductance pre-smoothing steps (-1: library default)
+    float mu_robust = SmoothOptions{}.mu_robust;  ///< robust conductance scale factor (0: fixed mu)
     bool second_order = false;         ///< Appendix A's second term in the refit
     std::size_t target_faces = 0;      ///< > 0: decimate the extracted mesh (CGAL edge collapse)
     DracoOptions draco;                ///< quantization and level for .drc / .glb outputs
@@ -241,6 +242,7 @@ int run_smooth(const SmoothArgs& a) {
     opt.alpha = a.alpha;
     opt.threads = a.grid.threads;
     if (a.presmooth >= 0) opt.conductance_presmooth_steps = a.presmooth;
+    opt.mu_robust = a.mu_robust;
     opt.second_order_term = a.second_order;
     // Fail on a bad output path before the long computation.
     if (mesh_format_from_path(a.output) == MeshFormat::Unknown)
@@ -259,6 +261,7 @@ int run_smooth(const SmoothArgs& a) {
     s.set("iterations", sr.iterations).set("seconds_per_iteration", Json::array(sr.seconds_per_iteration))
         .set("band_voxels", Json::array(sr.band_voxels)).set("normal_energy", Json::array(sr.normal_energy))
         .set("refit_energy", Json::array(sr.refit_energy));
+    if (!sr.mu.empty()) s.set("mu", Json::array(sr.mu));
     j.set("smooth", s);
     for (const auto& w : sr.warnings) j["warnings"].push(w);
     Mesh m = volume_to_mesh(v, progress, j, a.input, true);
@@ -322,6 +325,9 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--alpha", a->alpha, "high-boost amount")->check(CLI::NonNegativeNumber);
     cmd->add_option("--presmooth", a->presmooth,
                     "anisotropic: isotropic steps that regularise the conductance (0: the paper's raw g)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--mu-robust", a->mu_robust,
+                    "anisotropic: raise mu to C times the robust noise scale of the curvature (0: the fixed mu)")
         ->check(CLI::NonNegativeNumber);
     cmd->add_flag("--second-order", a->second_order, "add Appendix A's second term (Eq. 39) to the refit");
     cmd->add_option("--target-faces", a->target_faces, "decimate the result to at most N faces (CGAL edge collapse)")

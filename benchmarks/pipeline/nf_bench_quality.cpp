@@ -7,7 +7,7 @@
 // the result's face normal there and the ground truth's face normal at the closest point), next to
 // the noisy input. Distances are in voxels of the grid (h = longest side / R).
 //
-// usage: nf_bench_quality [--data DIR] [--resolution R] [--iterations K] [--mu MU] [--presmooth S]
+// usage: nf_bench_quality [--data DIR] [--resolution R] [--iterations K] [--mu MU] [--mu-robust C] [--presmooth S]
 //                         [--normal-dt DT] [--normal-steps N] [--samples S] [--only SUBSTRING]...
 //                         [--modes iso,aniso,floor] [--out DIR] [--threads T]
 // (floor: the ground truth scan-converted and extracted without smoothing, the error floor of the grid)
@@ -90,6 +90,7 @@ int main(int argc, char** argv) {
         else if (a == "--resolution") resolution = std::stoi(next());
         else if (a == "--iterations") base.iterations = std::stoi(next());
         else if (a == "--mu") base.mu = std::stof(next());
+        else if (a == "--mu-robust") base.mu_robust = std::stof(next());
         else if (a == "--presmooth") base.conductance_presmooth_steps = std::stoi(next());
         else if (a == "--normal-dt") base.normal_dt = std::stof(next());
         else if (a == "--normal-steps") base.normal_steps = std::stoi(next());
@@ -160,7 +161,9 @@ int main(int argc, char** argv) {
                     fs::create_directories(out);
                     write_mesh((out / (p.noisy.stem().string() + "_" + key + ".ply")).string(), m);
                 }
-                (void)rep;
+                if (!rep.mu.empty())
+                    std::printf("%-28s %-11s mu per iteration: %.3f ... %.3f\n", p.name.c_str(), "", double(rep.mu.front()),
+                                double(rep.mu.back()));
             }
         } catch (const std::exception& e) {
             std::fprintf(stderr, "%s: %s\n", p.name.c_str(), e.what());

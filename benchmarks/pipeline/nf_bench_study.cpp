@@ -1,5 +1,5 @@
 // nf_bench_study [DATA_DIR] [--samples N] [--resolution R] [--threads T] [--only SUBSTRING]...
-//                [--no-normalflow] [--csv FILE] [--md FILE]
+//                [--no-normalflow] [--modes iso,aniso] [--csv FILE] [--md FILE]
 // The comparison study of issue 6 on every noisy/ground-truth pair of shared/data: pairs_gnf, pairs_gcn
 // and pairs_nllr (DATA_DIR is shared/data). For each noisy mesh:
 //   - the noisy input itself;
@@ -152,6 +152,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> only;
     int resolution = 256, threads = 0;
     bool with_normalflow = true;
+    std::string modes = "iso,aniso";  // normalflow modes of the study rows
     CompareOptions co;
     co.sampling.samples = 50000;
     for (int i = 1; i < argc; ++i) {
@@ -164,6 +165,7 @@ int main(int argc, char** argv) {
         else if (a == "--threads" && has) threads = std::atoi(argv[++i]);
         else if (a == "--only" && has) only.emplace_back(argv[++i]);
         else if (a == "--no-normalflow") with_normalflow = false;
+        else if (a == "--modes" && has) modes = argv[++i];
         else if (!a.starts_with("--")) data = a;
         else {
             std::fprintf(stderr, "nf_bench_study: unknown or incomplete argument %s\n", a.c_str());
@@ -241,6 +243,8 @@ int main(int argc, char** argv) {
 
             if (with_normalflow) {
                 for (const SmoothMode mode : {SmoothMode::Isotropic, SmoothMode::Anisotropic}) {
+                    if (("," + modes + ",").find(mode == SmoothMode::Isotropic ? ",iso," : ",aniso,") == std::string::npos)
+                        continue;
                     t0 = now_ms();
                     const Mesh m = normalflow_smooth(noisy, resolution, mode, threads);
                     add(std::string("normalflow ") + to_string(mode), "R=" + std::to_string(resolution) + ", defaults",

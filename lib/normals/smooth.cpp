@@ -670,9 +670,47 @@ private:
         return sum;
     }
 
-    /// g at every face q+½e_a of the allocated samples, from the normals in src (Catté et al.).
-    void conductance_from(std::vector<float> (&src)[3]) {
-        const float inv2mu2 = inv2mu2_;
+    /// The robust noise scale of the curvature, σ_κ, from the normals in src (after Black, Sapiro,
+    /// Marimont & Heeger 1998): the lower quartile of |κ| over the faces of the active samples next
+    /// to the surface (|φ| <= 1), divided by 0.3186, the quartile of |x| for x ~ N(0, 1). The
+    /// quartile, not the median: creases and curved parts may cover up to 3/4 of the surface.
+    float curvature_noise_scale(std::vector<float> (&src)[3]) {
+        std::vector<std::int32_t> all(nblocks());
+        for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
+        std::vector<std::vector<float>> near(all.size());
+        for_blocks(all, 4, [&](std::size_t, std::int32_t b, Scratch& s) {
+            const Neighbourhood& n = nbh_[std::size_t(b)];
+            float* P = s.at(0);
+            float* N[3] = {s.at(1), s.at(2), s.at(3)};
+            gather_phi(n, phi_, P);
+            gather_n(n, src, N[0], N[1], N[2]);
+            const float* Nc[3] = {N[0], N[1], N[2]};
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            for (int a = 0; a < 3; ++a) {
+                const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
+                for (int z = 0; z < kBlockDim; ++z)
+                    for (int y = 0; y < kBlockDim; ++y)
+                        for (int x = 0; x < kBlockDim; ++x) {
+                            const int q = lidx(x, y, z);
+                            if (!mask_[base + std::size_t(bidx(x, y, z))] || !(std::abs(P[q]) <= 1.0f)) continue;
+                            float m[3], k2;
+                            face_terms(P, Nc, q, sa, sb, sc, m, k2);
+                            near[std::size_t(b)].push_back(k2);
+                        }
+            }
+        });
+        std::vector<float> k2s;  // in block order: the quartile does not depend on the threads
+        for (const auto& v : near) k2s.insert(k2s.end(), v.begin(), v.end());
+        if (k2s.empty()) return 0.0f;
+        auto q = k2s.begin() + std::ptrdiff_t(k2s.size() / 4);
+        std::nth_element(k2s.begin(), q, k2s.end());
+        return std::sqrt(std::max(*q, 0.0f)) / 0.3186f;
+    }
+
+    /// g at every face q+½e_a of the allocated samples, from the normals in src (Catté et al.),
+    /// with the conductance scale mu.
+    void conductance_from(std::vector<float> (&src)[3], float mu) {
+        const float inv2mu2 = 1.0f / (2.0f * mu * mu);
         std::vector<std::int32_t> all(nblocks());
         for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
         for_blocks(all, 4, [&](std::size_t, std::int32_t b, Scratch& s) {
@@ -696,6 +734,20 @@ private:
         });
     }
 
+    /// The conductance scale of this main iteration (see SmoothOptions::mu_robust): µ, or
+    /// max(µ, mu_robust · σ_κ). σ_κ is measured on the pre-smoothed normals (the noise that the
+    /// conductance will see), but taken as at most the same scale of the raw normals: on a clean
+    /// surface the raw normals are exactly flat on its flat parts (σ = 0), while pre-smoothing bends
+    /// them near every crease, which on a small part can cover most of the surface. The scale is
+    /// never above the previous iteration's (the schedule only goes from coarse to fine).
+    float conductance_scale(std::vector<float> (&raw)[3], std::vector<float> (&presmoothed)[3]) {
+        if (!(opt_.mu_robust > 0.0f)) return opt_.mu;
+        const float sigma = std::min(curvature_noise_scale(presmoothed), curvature_noise_scale(raw));
+        float mu = std::max(opt_.mu, opt_.mu_robust * sigma);
+        if (!rep_.mu.empty()) mu = std::min(mu, rep_.mu.back());
+        return mu;
+    }
+
     void copy_fields(std::vector<float> (&src)[3], std::vector<float> (&dst)[3]) {
         for (int c = 0; c < 3; ++c) dst[c] = src[c];
     }
@@ -715,8 +767,11 @@ private:
                     normal_step(aux_, n2_, Conductance::One, true);
                     std::swap(aux_, n2_);
                 }
-                conductance_from(aux_);
+                const float mu = conductance_scale(n_, aux_);
+                conductance_from(aux_, mu);
+                rep_.mu.push_back(mu);
             } else {
+                rep_.mu.push_back(opt_.mu);
                 cond = Conductance::Live;
             }
         }
@@ -975,6 +1030,8 @@ void validate(const Volume& v, const SmoothOptions& opt) {
     if (opt.refit_max_steps < 1) bad("refit_max_steps must be >= 1, got " + std::to_string(opt.refit_max_steps));
     if (!(opt.refit_tolerance >= 0.0)) bad("refit_tolerance must be >= 0");
     if (opt.conductance_presmooth_steps < 0) bad("conductance_presmooth_steps must be >= 0");
+    if (!(opt.mu_robust >= 0.0f) || !std::isfinite(opt.mu_robust))
+        bad("mu_robust must be >= 0, got " + std::to_string(opt.mu_robust));
     if (!(opt.active_band >= 1.5f && opt.active_band <= 5.0f))
         bad("active_band must be in [1.5, 5] voxels, got " + std::to_string(opt.active_band));
     if (opt.threads < 0) bad("threads must be >= 0, got " + std::to_string(opt.threads));

@@ -84,6 +84,32 @@ inline void add_noise(Volume& v, double amplitude, std::uint32_t seed) {
     }
 }
 
+/// Adds spatially correlated noise of the given amplitude to every allocated sample: hash noise
+/// on a lattice of `spacing` voxels, interpolated trilinearly (like mesh noise with edges of that
+/// length, which a few steps of smoothing cannot remove, unlike per-sample noise).
+inline void add_smooth_noise(Volume& v, double amplitude, double spacing, std::uint32_t seed) {
+    for (std::size_t b = 0; b < v.block_count(); ++b) {
+        const auto& bc = v.block_coords[b];
+        float* vals = v.block_values(std::int32_t(b));
+        for (int z = 0; z < kBlockDim; ++z)
+            for (int y = 0; y < kBlockDim; ++y)
+                for (int x = 0; x < kBlockDim; ++x) {
+                    const double p[3] = {(bc[0] * kBlockDim + x) / spacing, (bc[1] * kBlockDim + y) / spacing,
+                                         (bc[2] * kBlockDim + z) / spacing};
+                    const int i0[3] = {int(std::floor(p[0])), int(std::floor(p[1])), int(std::floor(p[2]))};
+                    const double f[3] = {p[0] - i0[0], p[1] - i0[1], p[2] - i0[2]};
+                    double n = 0.0;
+                    for (int c = 0; c < 8; ++c) {
+                        const int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+                        double w = 1.0;
+                        for (int a = 0; a < 3; ++a) w *= d[a] ? f[a] : 1.0 - f[a];
+                        n += w * hash_noise(i0[0] + d[0], i0[1] + d[1], i0[2] + d[2], seed);
+                    }
+                    vals[Volume::local_index(x, y, z)] += float(amplitude * n);
+                }
+    }
+}
+
 /// Volume of {φ < 0} in voxels³, with a linear ramp of one voxel across the interface.
 inline double inside_volume(const Volume& v) {
     double vol = 0.0;
