@@ -1,4 +1,5 @@
 // normalflow tetmesh IN OUT.(mesh|vtu|node) [--quality 1.414] [--min-dihedral 10] [--optimize 2] [--max-volume V]
+//                   [--surface auto|keep|split]
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -18,6 +19,7 @@ struct TetmeshArgs {
     double quality = 1.414, max_volume = 0.0;
     double min_dihedral = 10.0;  // TetmeshOptions defaults (the header is absent in builds without TetGen)
     int optimize = 2;
+    std::string surface = "auto";  // TetmeshOptions::Surface
     OutputFlags out;
 };
 
@@ -29,6 +31,9 @@ int run_tetmesh(const TetmeshArgs& a) {
     o.max_volume = a.max_volume;
     o.min_dihedral_deg = a.min_dihedral;
     o.optimize_level = a.optimize;
+    o.surface = a.surface == "keep"    ? TetmeshOptions::Surface::Keep
+                : a.surface == "split" ? TetmeshOptions::Surface::Split
+                                       : TetmeshOptions::Surface::Auto;
     TetmeshReport r;
     const TetMesh t = tetrahedralize(m, o, &r);
     write_tetmesh(a.output, t);
@@ -68,6 +73,11 @@ void add_tetmesh_command(CLI::App& app) {
         ->check(CLI::Range(0, 10))
         ->capture_default_str();
     cmd->add_option("--max-volume", a->max_volume, "largest tetrahedron volume, world units^3 (0 = none)");
+    cmd->add_option("--surface", a->surface,
+                    "keep: the input triangles are the boundary faces (TetGen -Y); split: TetGen may split them "
+                    "to meet the bounds; auto: keep, or split with --max-volume")
+        ->check(CLI::IsMember({"auto", "keep", "split"}))
+        ->capture_default_str();
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_tetmesh);
 }

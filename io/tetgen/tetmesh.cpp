@@ -130,18 +130,24 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
     // TetGen 1.5.0 merges adjacent faces within 0.1 degrees of coplanar (its facet_ang_tol 179.9) into
     // one facet. Surfaces extracted from a volume have thousands of such nearly, not exactly, coplanar
     // pairs; recovering the non-planar merged facets aborts in fillcavity ("searchtet.tet !=
-    // midface->tet") or crashes (fandisk at 287k and 10k faces, a sphere at 461k). On such a failure
-    // the second run adds Y: the input triangles stay the boundary faces, unsplit and unmerged, and
-    // the run succeeds; -a (max_volume) is then honoured only away from the surface.
-    std::string used = sw;
+    // midface->tet") or crashes (fandisk at 287k and 10k faces, a sphere at 461k). With Y (Keep, the
+    // default without max_volume) the input triangles stay the boundary faces, unsplit and unmerged,
+    // and the run succeeds; -a (max_volume) is then honoured only away from the surface. Without it
+    // (Split) a failed run is retried with Y.
+    const std::string plain = sw, with_y = plain.substr(0, 2) + "Y" + plain.substr(2);  // "pzY..."
+    const bool keep = opt.surface == TetmeshOptions::Surface::Keep ||
+                      (opt.surface == TetmeshOptions::Surface::Auto && !(opt.max_volume > 0));
+    std::string used = keep ? with_y : plain;
     std::string bytes;
     try {
         bytes = run(used);
     } catch (const NumericalError&) {
-        used.insert(2, "Y");
+        if (keep) throw;
+        used = with_y;
         bytes = run(used);
     } catch (const IoError&) {
-        used.insert(2, "Y");
+        if (keep) throw;
+        used = with_y;
         bytes = run(used);
     }
     ByteReader reader(bytes, "tetrahedralize");

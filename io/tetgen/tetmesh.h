@@ -23,6 +23,17 @@ struct TetmeshOptions {
     /// TetGen's mesh optimisation level (-O<level>; flips and vertex smoothing that raise the smallest
     /// dihedral angle), 0 (none) .. 10; TetGen's default is 2.
     int optimize_level = 2;
+    /// Whether the input triangles stay the boundary faces (TetGen -Y): the tetrahedra then meet the
+    /// surface in exactly its triangles and Steiner points go only inside. Keep: the surface users
+    /// pass has been extracted, cleaned and decimated on purpose, and without Y TetGen 1.5 either
+    /// aborts on such surfaces (it merges nearly coplanar neighbours into non-planar facets) or splits
+    /// them far beyond need (fandisk, 20k faces: 1.52 M tetrahedra in 65 s, 54 k in 6 s with Y).
+    /// Split: TetGen may split boundary faces to meet the quality and volume bounds there too; a run
+    /// that fails is retried with Y (TetmeshReport::switches says which ran). Auto (default): Keep,
+    /// or Split when max_volume > 0, because with Y TetGen leaves tetrahedra at the surface as large
+    /// as the surface triangles make them (a cube of 12 triangles stays 6 tetrahedra).
+    enum class Surface { Auto, Keep, Split };
+    Surface surface = Surface::Auto;
 };
 
 /// A tetrahedral mesh: points and tetrahedra (4 point indices, positive orientation as TetGen writes).

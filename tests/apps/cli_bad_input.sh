@@ -57,5 +57,21 @@ assert d["repaired"] is True and d["repair"]["duplicates_removed"] == 0, d
 assert d["triangles"] == 12 and d["closed"] is True, d
 PY
 
+# tetmesh --json: the cube's 12 triangles stay the boundary (TetGen -Y) unless --surface split
+if "$nf" tetmesh --json "$fixtures/cube_ascii.ply" "$tmp/cube.vtu" >"$tmp/out.txt" 2>"$tmp/err.txt"; then
+  "$nf" tetmesh --json --surface split --max-volume 0.01 "$fixtures/cube_ascii.ply" "$tmp/cube2.vtu" \
+    >"$tmp/out2.txt" 2>"$tmp/err.txt" || fail "tetmesh --surface split failed: $(cat "$tmp/err.txt")"
+  python3 - "$tmp/out.txt" "$tmp/out2.txt" <<'PY' || fail "tetmesh --json output wrong"
+import json, sys
+k = json.loads(open(sys.argv[1]).read().splitlines()[-1])
+s = json.loads(open(sys.argv[2]).read().splitlines()[-1])
+assert "Y" in k["switches"] and "Y" not in s["switches"], (k, s)
+assert abs(k["volume"] - k["surface_volume"]) < 1e-9 * k["surface_volume"], k
+assert s["tetrahedra"] > 10 * k["tetrahedra"], (k, s)
+PY
+elif ! grep -q "needs a build with TetGen" "$tmp/err.txt"; then
+  fail "tetmesh failed: $(cat "$tmp/err.txt")"
+fi
+
 [ "$failures" -eq 0 ] || { echo "$failures failure(s)"; exit 1; }
 echo "all CLI bad-input checks passed"

@@ -1,11 +1,15 @@
 // Output for real users: cleanup, Draco/glTF files checked by tools nobody here wrote, TetGen.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <tuple>
 #include <string>
 
 #include "../sdf/sdf_test_meshes.h"
@@ -246,6 +250,67 @@ double mean_edge(const Mesh& m) {
 }
 
 }  // namespace
+
+namespace {
+
+using Corners3 = std::array<Vec3d, 3>;
+
+bool less_point(const Vec3d& a, const Vec3d& b) { return std::tie(a[0], a[1], a[2]) < std::tie(b[0], b[1], b[2]); }
+
+/// A triangle as its corner positions in a canonical (sorted) order.
+Corners3 canonical(Vec3d a, Vec3d b, Vec3d c) {
+    Corners3 t = {a, b, c};
+    std::sort(t.begin(), t.end(), less_point);
+    return t;
+}
+
+void sort_tris(std::vector<Corners3>& v) {
+    std::sort(v.begin(), v.end(), [](const Corners3& a, const Corners3& b) {
+        return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end(), less_point);
+    });
+}
+
+/// The faces that belong to one tetrahedron only (the boundary of the tet mesh), canonical, sorted.
+std::vector<Corners3> tet_boundary(const TetMesh& t) {
+    std::map<std::array<std::uint32_t, 3>, int> count;
+    for (const auto& tt : t.tets)
+        for (int k = 0; k < 4; ++k) {
+            std::array<std::uint32_t, 3> f = {tt[(k + 1) % 4], tt[(k + 2) % 4], tt[(k + 3) % 4]};
+            std::sort(f.begin(), f.end());
+            ++count[f];
+        }
+    std::vector<Corners3> out;
+    for (const auto& [f, n] : count)
+        if (n == 1) out.push_back(canonical(t.points[f[0]], t.points[f[1]], t.points[f[2]]));
+    sort_tris(out);
+    return out;
+}
+
+}  // namespace
+
+TEST(Tetmesh, KeepsTheSurfaceTrianglesUnlessAskedOrSizedOtherwise) {
+    const Mesh s = icosphere(1.0, 2);
+    std::vector<Corners3> want;
+    auto pos = [&](std::uint32_t i) { return Vec3d{s.positions[i][0], s.positions[i][1], s.positions[i][2]}; };
+    for (const auto& t : s.triangles) want.push_back(canonical(pos(t[0]), pos(t[1]), pos(t[2])));
+    sort_tris(want);
+    TetmeshReport rk, rs, ra;
+    const TetMesh kept = tetrahedralize(s, {}, &rk);  // Auto without max_volume: Keep
+    EXPECT_NE(rk.switches.find('Y'), std::string::npos) << rk.switches;
+    EXPECT_EQ(tet_boundary(kept), want);  // exactly the input triangles
+    TetmeshOptions o;
+    o.surface = TetmeshOptions::Surface::Split;
+    o.min_dihedral_deg = 18;  // a bound the surface's own tetrahedra miss: TetGen splits the boundary
+    const TetMesh split = tetrahedralize(s, o, &rs);
+    EXPECT_EQ(rs.switches.find('Y'), std::string::npos) << rs.switches;
+    EXPECT_GT(tet_boundary(split).size(), want.size());
+    o = {};
+    o.max_volume = 1e-3;  // Auto with max_volume: Split, so the bound holds at the surface too
+    const TetMesh sized = tetrahedralize(s, o, &ra);
+    EXPECT_EQ(ra.switches.find('Y'), std::string::npos) << ra.switches;
+    EXPECT_GT(tet_boundary(sized).size(), want.size());
+    for (const TetmeshReport& r : {rk, rs, ra}) EXPECT_NEAR(r.volume, r.surface_volume, 1e-6 * r.surface_volume);
+}
 
 TEST(Tetmesh, DihedralBoundRemovesSlivers) {
     const Mesh s = icosphere(1.0, 3);
