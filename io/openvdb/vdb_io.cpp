@@ -7,6 +7,7 @@
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tree/ValueAccessor.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <cstdint>
@@ -22,6 +23,7 @@
 #include <vector>
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include "core/errors.h"
 #include "io/formats/atomic_file.h"
@@ -124,14 +126,49 @@ std::uint64_t data_segment_bytes() {
     return 0;
 }
 
+}  // namespace
+}  // namespace normalflow
+
+// Set only when a sanitizer runtime is linked (weak: null otherwise); <sanitizer/allocator_interface.h>
+// is not shipped with GCC.
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
+                                                         void (*free_hook)(const volatile void*))
+    __attribute__((weak));
+extern "C" std::size_t __sanitizer_get_allocated_size(const volatile void* p) __attribute__((weak));
+
+namespace normalflow {
+namespace {
+
+/// Exit status of the isolated .vdb child that went over its heap cap under AddressSanitizer.
+constexpr int kHeapCapExit = 86;
+std::uint64_t g_heap_cap = 0;   // the child's cap under ASan, bytes (0: none)
+std::uint64_t g_heap_live = 0;  // bytes allocated and not freed since the hooks went in (child only)
+
+void heap_cap_malloc_hook(const volatile void*, std::size_t size) {
+    g_heap_live += size;
+    if (g_heap_cap && g_heap_live > g_heap_cap) ::_exit(kHeapCapExit);  // allocates nothing
+}
+void heap_cap_free_hook(const volatile void* p) {
+    const std::size_t size = __sanitizer_get_allocated_size ? __sanitizer_get_allocated_size(p) : 0;
+    g_heap_live -= std::min<std::uint64_t>(g_heap_live, size);
+}
+
 /// Caps the heap of the isolated child that reads a .vdb. A corrupt file can state a string length of
 /// gigabytes, which OpenVDB allocates before it notices that the file is short (a 4 KB fuzz input made
 /// it take 5 GB and 26 s); no real file of `file_bytes` bytes needs more than about 64 times its size
-/// plus the tree's fixed node overhead. Skipped under AddressSanitizer, whose shadow memory the limit
-/// would count.
+/// plus the tree's fixed node overhead. Normally RLIMIT_DATA (allocations fail: std::bad_alloc).
+/// Under AddressSanitizer, whose shadow memory RLIMIT_DATA would count, the child counts the bytes it
+/// allocates instead (sanitizer malloc hooks) and leaves with status 86 when they exceed the cap (a
+/// fuzz input made the instrumented child allocate for 15 s without it).
 std::uint64_t cap_child_heap(std::uint64_t file_bytes) {
-    if (kAddressSanitizer) return 0;
-    const std::uint64_t limit = data_segment_bytes() + (std::uint64_t(512) << 20) + 64 * file_bytes;
+    const std::uint64_t budget = (std::uint64_t(512) << 20) + 64 * file_bytes;
+    if (kAddressSanitizer) {
+        if (!__sanitizer_install_malloc_and_free_hooks || !__sanitizer_get_allocated_size) return 0;
+        g_heap_cap = budget;
+        g_heap_live = 0;
+        return __sanitizer_install_malloc_and_free_hooks(heap_cap_malloc_hook, heap_cap_free_hook) ? budget : 0;
+    }
+    const std::uint64_t limit = data_segment_bytes() + budget;
     const rlimit rl{limit, limit};
     return setrlimit(RLIMIT_DATA, &rl) == 0 ? limit : 0;
 }
