@@ -670,14 +670,12 @@ private:
         return sum;
     }
 
-    /// The robust noise scale of the curvature, σ_κ, from the normals in src (after Black, Sapiro,
-    /// Marimont & Heeger 1998): the lower quartile of |κ| over the faces of the active samples next
-    /// to the surface (|φ| <= 1), divided by 0.3186, the quartile of |x| for x ~ N(0, 1). The
-    /// quartile, not the median: creases and curved parts may cover up to 3/4 of the surface.
-    float curvature_noise_scale(std::vector<float> (&src)[3]) {
+    /// κ² at the faces q+½e_a of every allocated sample i for which keep(i, φ_i) holds, from the
+    /// normals in src: emit(block, a, i, κ²), in parallel over blocks.
+    template <class Keep, class Emit>
+    void face_curvatures(std::vector<float> (&src)[3], Keep&& keep, Emit&& emit) {
         std::vector<std::int32_t> all(nblocks());
         for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
-        std::vector<std::vector<float>> near(all.size());
         for_blocks(all, 4, [&](std::size_t, std::int32_t b, Scratch& s) {
             const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
@@ -692,13 +690,25 @@ private:
                     for (int y = 0; y < kBlockDim; ++y)
                         for (int x = 0; x < kBlockDim; ++x) {
                             const int q = lidx(x, y, z);
-                            if (!mask_[base + std::size_t(bidx(x, y, z))] || !(std::abs(P[q]) <= 1.0f)) continue;
+                            const std::size_t i = base + std::size_t(bidx(x, y, z));
+                            if (!keep(i, P[q])) continue;
                             float m[3], k2;
                             face_terms(P, Nc, q, sa, sb, sc, m, k2);
-                            near[std::size_t(b)].push_back(k2);
+                            emit(std::size_t(b), a, i, k2);
                         }
             }
         });
+    }
+
+    /// The robust noise scale of the curvature, σ_κ, from the normals in src (after Black, Sapiro,
+    /// Marimont & Heeger 1998): the lower quartile of |κ| over the faces of the active samples next
+    /// to the surface (|φ| <= 1), divided by 0.3186, the quartile of |x| for x ~ N(0, 1). The
+    /// quartile, not the median: creases and curved parts may cover up to 3/4 of the surface.
+    float curvature_noise_scale(std::vector<float> (&src)[3]) {
+        std::vector<std::vector<float>> near(nblocks());
+        face_curvatures(
+            src, [&](std::size_t i, float phi) { return mask_[i] && std::abs(phi) <= 1.0f; },
+            [&](std::size_t b, int, std::size_t, float k2) { near[b].push_back(k2); });
         std::vector<float> k2s;  // in block order: the quartile does not depend on the threads
         for (const auto& v : near) k2s.insert(k2s.end(), v.begin(), v.end());
         if (k2s.empty()) return 0.0f;
@@ -711,27 +721,9 @@ private:
     /// with the conductance scale mu.
     void conductance_from(std::vector<float> (&src)[3], float mu) {
         const float inv2mu2 = 1.0f / (2.0f * mu * mu);
-        std::vector<std::int32_t> all(nblocks());
-        for (std::size_t b = 0; b < all.size(); ++b) all[b] = std::int32_t(b);
-        for_blocks(all, 4, [&](std::size_t, std::int32_t b, Scratch& s) {
-            const Neighbourhood& n = nbh_[std::size_t(b)];
-            float* P = s.at(0);
-            float* N[3] = {s.at(1), s.at(2), s.at(3)};
-            gather_phi(n, phi_, P);
-            gather_n(n, src, N[0], N[1], N[2]);
-            const float* Nc[3] = {N[0], N[1], N[2]};
-            const std::size_t base = std::size_t(b) * kBlockVoxels;
-            for (int a = 0; a < 3; ++a) {
-                const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
-                for (int z = 0; z < kBlockDim; ++z)
-                    for (int y = 0; y < kBlockDim; ++y)
-                        for (int x = 0; x < kBlockDim; ++x) {
-                            float m[3], k2;
-                            face_terms(P, Nc, lidx(x, y, z), sa, sb, sc, m, k2);
-                            gface_[a][base + std::size_t(bidx(x, y, z))] = std::exp(-k2 * inv2mu2);
-                        }
-            }
-        });
+        face_curvatures(
+            src, [](std::size_t, float) { return true; },
+            [&](std::size_t, int a, std::size_t i, float k2) { gface_[a][i] = std::exp(-k2 * inv2mu2); });
     }
 
     /// The conductance scale of this main iteration (see SmoothOptions::mu_robust): µ, or
