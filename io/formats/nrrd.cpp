@@ -461,25 +461,21 @@ Volume NrrdReader::read() {
     Grid g;
     setup_geometry(g);
 
-    // Half width and background.
+    // Half width and background: positive, and checked against the float range (a finite double such
+    // as 2e128 would become +Inf as a float).
+    auto positive_float = [&](const char* key) {
+        const auto v = parse_numbers(keys_.at(key), 1, key);
+        if (!(v[0] > 0) || !(v[0] <= std::numeric_limits<float>::max()))
+            bad(std::string(key) + " must be > 0 and fit in a float");
+        return float(v[0]);
+    };
     float half_width = opt_.half_width;
     if (half_width == 0) {
         half_width = 3.f;
-        if (const auto it = keys_.find("normalflow_half_width"); it != keys_.end()) {
-            const auto v = parse_numbers(it->second, 1, "normalflow_half_width");
-            if (!(v[0] > 0) || !(v[0] <= std::numeric_limits<float>::max()))
-                bad("normalflow_half_width must be > 0 and fit in a float");
-            half_width = float(v[0]);
-        }
+        if (keys_.count("normalflow_half_width")) half_width = positive_float("normalflow_half_width");
     }
     Volume vol(g, half_width);
-    if (const auto it = keys_.find("normalflow_background"); it != keys_.end()) {
-        const auto v = parse_numbers(it->second, 1, "normalflow_background");
-        // Checked against the float range: a finite double such as 2e128 would become +Inf as a float.
-        if (!(v[0] > 0) || !(v[0] <= std::numeric_limits<float>::max()))
-            bad("normalflow_background must be > 0 and fit in a float");
-        vol.background = float(v[0]);
-    }
+    if (keys_.count("normalflow_background")) vol.background = positive_float("normalflow_background");
     const double band = double(half_width) * g.voxel_size;
 
     // Position at the data and check that the file can hold what the sizes claim, before allocating.

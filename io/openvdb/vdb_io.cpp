@@ -148,9 +148,8 @@ void heap_cap_malloc_hook(const volatile void*, std::size_t size) {
     g_heap_live += size;
     if (g_heap_cap && g_heap_live > g_heap_cap) ::_exit(kHeapCapExit);  // allocates nothing
 }
-void heap_cap_free_hook(const volatile void* p) {
-    const std::size_t size = __sanitizer_get_allocated_size ? __sanitizer_get_allocated_size(p) : 0;
-    g_heap_live -= std::min<std::uint64_t>(g_heap_live, size);
+void heap_cap_free_hook(const volatile void* p) {  // installed only where the runtime has the function
+    g_heap_live -= std::min<std::uint64_t>(g_heap_live, __sanitizer_get_allocated_size(p));
 }
 
 /// Caps the heap of the isolated child that reads a .vdb. A corrupt file can state a string length of
