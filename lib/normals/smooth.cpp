@@ -7,10 +7,12 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <string>
 #include <utility>
@@ -33,8 +35,23 @@ const char* to_string(SmoothMode mode) {
 namespace detail {
 namespace {
 
+// The row kernels below are plain C++ that the compiler vectorises. On x86-64 each is also built
+// for AVX2 and the widest the CPU has is picked at load time (GCC/Clang function multiversioning).
+// AVX2 without FMA (no contraction) does the same IEEE operations on wider vectors, so the results
+// are the same, bit for bit, on every machine. NORMALFLOW_NO_TARGET_CLONES builds the baseline only.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(NORMALFLOW_NO_TARGET_CLONES)
+#define NF_ROW_KERNEL [[gnu::noinline, gnu::target_clones("avx2", "default")]]
+#else
+#define NF_ROW_KERNEL [[gnu::noinline]]
+#endif
+
 constexpr float kHalfWidth = 8.0f;      // engine band half width, voxels
 constexpr float kMaxDt = 1.0f / 6.0f;   // explicit stability bound of the 3-D second-order operators
+// Reinitialisation stops when no sample moved by more than this in a Jacobi pass (voxels). The
+// passes reach the far end of the band within ~15 passes; after that the values creep by ~2e-5 per
+// pass along chains of nearly equal distances (fandisk at 256: all 24 passes ran on 90% of the
+// blocks before this tolerance). What is left is below 1e-3 voxel.
+constexpr float kReinitTolerance = 1e-3f;
 constexpr int L = 10;                   // local buffer: 8 + 2 halo
 constexpr int L2 = L * L;
 constexpr int L3 = L * L * L;
@@ -98,6 +115,7 @@ inline void face_terms(const float* P, const float* const N[3], int q, int sa, i
 /// bit-identical. F = g·m (g = G[q] when kFrozen, else 1) or 0 where both samples of the face lie
 /// outside the band (the faces the engine skips); K = κ².
 template <bool kFrozen>
+NF_ROW_KERNEL
 void face_row(const float* __restrict P, const float* __restrict N0, const float* __restrict N1,
               const float* __restrict N2, const float* __restrict G, int q0, int n, int sa, int sb, int sc,
               float band, float* __restrict F0, float* __restrict F1, float* __restrict F2, float* __restrict K) {
@@ -124,13 +142,105 @@ void face_row(const float* __restrict P, const float* __restrict N0, const float
         const float dn2 = ((a0 * a0 + b0 * b0 + d0 * d0) + (a1 * a1 + b1 * b1 + d1 * d1)) + (a2 * a2 + b2 * b2 + d2 * d2);
         const float c2 = (C0 * C0 + C1 * C1) + C2 * C2;
         const float k2 = std::max(dn2 - c2 * g2, 0.0f);
-        const bool skip = std::abs(P[q]) > band && std::abs(P[q1]) > band;
-        const float g = kFrozen ? G[q] : 1.0f;
-        F0[q] = skip ? 0.0f : g * (a0 - dphi * C0);
-        F1[q] = skip ? 0.0f : g * (a1 - dphi * C1);
-        F2[q] = skip ? 0.0f : g * (a2 - dphi * C2);
+        // a mask, not a branch (no short-circuit): the loop stays vectorisable
+        const float keep = float(!((std::abs(P[q]) > band) & (std::abs(P[q1]) > band)));
+        const float g = kFrozen ? G[q] * keep : keep;
+        F0[q] = g * (a0 - dphi * C0);
+        F1[q] = g * (a1 - dphi * C1);
+        F2[q] = g * (a2 - dphi * C2);
         K[q] = k2;
     }
+}
+
+/// The update of one row of 8 samples of the normal loop: N ← normalize(N + dt (I − NNᵀ) ∇·F) where
+/// m (the active samples), N elsewhere. f<a><c>: flux component c through the faces x+½e_a of the
+/// row (the face below a sample is at −1, −L, −L² from it); n<c>: the normals. Branch-free (selects)
+/// and with restrict parameters so that it vectorises. Returns 1 if an active result is not finite.
+NF_ROW_KERNEL int update_row(const float* __restrict fx0, const float* __restrict fx1, const float* __restrict fx2,
+               const float* __restrict fy0, const float* __restrict fy1, const float* __restrict fy2,
+               const float* __restrict fz0, const float* __restrict fz1, const float* __restrict fz2,
+               const float* __restrict n0, const float* __restrict n1, const float* __restrict n2,
+               const std::uint8_t* __restrict m, float dt, float* __restrict d0, float* __restrict d1,
+               float* __restrict d2) {
+    int nonfinite = 0;
+    for (int x = 0; x < kBlockDim; ++x) {
+        const float v0 = (fx0[x] - fx0[x - 1]) + (fy0[x] - fy0[x - L]) + (fz0[x] - fz0[x - L2]);
+        const float v1 = (fx1[x] - fx1[x - 1]) + (fy1[x] - fy1[x - L]) + (fz1[x] - fz1[x - L2]);
+        const float v2 = (fx2[x] - fx2[x - 1]) + (fy2[x] - fy2[x - L]) + (fz2[x] - fz2[x - L2]);
+        const float nx = n0[x], ny = n1[x], nz = n2[x];
+        const float pn = v0 * nx + v1 * ny + v2 * nz;
+        const float ux = nx + dt * (v0 - pn * nx);
+        const float uy = ny + dt * (v1 - pn * ny);
+        const float uz = nz + dt * (v2 - pn * nz);
+        const float len = std::sqrt(ux * ux + uy * uy + uz * uz);
+        const bool act = m[x] != 0;
+        nonfinite |= int(act & !(len <= std::numeric_limits<float>::max()));
+        const float div = len > 1e-6f ? len : 1.0f;
+        d0[x] = act ? ux / div : nx;
+        d1[x] = act ? uy / div : ny;
+        d2[x] = act ? uz / div : nz;
+    }
+    return nonfinite;
+}
+
+/// One Jacobi pass of the unsigned distance on a row of 8 samples: where m is set the sample is
+/// fixed (out = U), elsewhere out = min(U, the Godunov upwind solution of |∇u| = 1 from the smaller
+/// neighbour per axis, h = 1). U points at the row's first sample in the padded local buffer.
+/// Branch-free (a sorting network and selects) so that it vectorises; the same values as solving
+/// with the sorted neighbours a0 <= a1 <= a2 in turn: a0 + 1, then the 2-D, then the 3-D root.
+/// Returns 1 when a free sample decreased by more than kReinitTolerance.
+NF_ROW_KERNEL int eikonal_row(const float* __restrict U, const std::uint8_t* __restrict m,
+                                  float* __restrict out) {
+    int changed = 0;
+    for (int x = 0; x < kBlockDim; ++x) {
+        const float c = U[x];
+        float a0 = std::min(U[x - 1], U[x + 1]);
+        float a1 = std::min(U[x - L], U[x + L]);
+        float a2 = std::min(U[x - L2], U[x + L2]);
+        const float s01 = std::min(a0, a1), l01 = std::max(a0, a1);
+        a0 = s01;
+        a1 = std::min(l01, a2);
+        a2 = std::max(l01, a2);
+        const float s0 = std::min(a0, a1);
+        a1 = std::max(a0, a1);
+        a0 = s0;
+        const float d1 = a0 + 1.0f;
+        const float s2 = a0 + a1;
+        const float dd = a0 - a1;
+        const float d2 = 0.5f * (s2 + std::sqrt(std::max(2.0f - dd * dd, 0.0f)));
+        const float s3 = a0 + a1 + a2;
+        const float q2 = a0 * a0 + a1 * a1 + a2 * a2;
+        const float d3 = (s3 + std::sqrt(std::max(s3 * s3 - 3.0f * (q2 - 1.0f), 0.0f))) / 3.0f;
+        const float d = d1 > a1 ? (d2 > a2 ? d3 : d2) : d1;
+        const float nu = std::min(c, d);
+        const bool fixed = m[x] != 0;
+        changed |= int(!fixed & (c - nu > kReinitTolerance));
+        out[x] = fixed ? c : nu;
+    }
+    return changed;
+}
+
+/// e^x for x <= 0, branch-free so that the loops calling it vectorise (expf is a library call
+/// per element): x = n ln2 + r with |r| <= ln2/2, e^r by Cephes' expf polynomial (1 + r + r²/2 + …,
+/// degree 7), 2ⁿ from the exponent bits. Within 1 ulp of expf on [−87, 0] (relative error < 8e−8,
+/// checked on every 256th float of the range); below −87 it returns
+/// e^−87 ≈ 1.6e−38 (where expf gives a denormal or 0). Plain float operations, no contraction: the
+/// same value at every vector width and on every thread.
+inline float exp_nonpositive(float x) {
+    x = std::max(x, -87.0f);
+    const float t = x * 1.44269504088896341f + 12582912.0f;  // 1.5·2²³: rounds x·log₂e to an integer
+    const float n = t - 12582912.0f;
+    const std::int32_t ni = std::bit_cast<std::int32_t>(t) - 0x4B400000;
+    const float r = (x - n * 0.693359375f) + n * 2.12194440e-4f;  // ln2 = 0.693359375 − 2.12194440e−4
+    const float r2 = r * r;
+    float p = 1.9875691500e-4f;
+    p = p * r + 1.3981999507e-3f;
+    p = p * r + 8.3334519073e-3f;
+    p = p * r + 4.1665795894e-2f;
+    p = p * r + 1.6666665459e-1f;
+    p = p * r + 5.0000001201e-1f;
+    const float er = p * r2 + r + 1.0f;
+    return er * std::bit_cast<float>((ni + 127) << 23);
 }
 
 class LevelSetEngine {
@@ -395,7 +505,6 @@ private:
             n_[c].resize(n);
             n2_[c].resize(n);
             aux_[c].resize(n);
-            if (opt_.mode == SmoothMode::Anisotropic && opt_.conductance_presmooth_steps > 0) gface_[c].resize(n);
         }
         hn_.resize(n);
         mask_.resize(n);
@@ -471,35 +580,13 @@ private:
                 float* U = s.at(0);
                 gather(n, u.data(), kHalfWidth, kHalfWidth, U);
                 const std::size_t base = std::size_t(b) * kBlockVoxels;
-                bool ch = false;
+                int ch = 0;
                 for (int z = 0; z < kBlockDim; ++z)
-                    for (int y = 0; y < kBlockDim; ++y)
-                        for (int x = 0; x < kBlockDim; ++x) {
-                            const std::size_t i = base + std::size_t(bidx(x, y, z));
-                            const int q = lidx(x, y, z);
-                            if (mask_[i]) {
-                                u2[i] = U[q];
-                                continue;
-                            }
-                            float a[3] = {std::min(U[q - 1], U[q + 1]), std::min(U[q - L], U[q + L]),
-                                          std::min(U[q - L2], U[q + L2])};
-                            std::sort(a, a + 3);
-                            float d = a[0] + 1.0f;
-                            if (d > a[1]) {
-                                const float s2 = a[0] + a[1];
-                                const float dd = a[0] - a[1];
-                                d = 0.5f * (s2 + std::sqrt(std::max(2.0f - dd * dd, 0.0f)));
-                                if (d > a[2]) {
-                                    const float s3 = a[0] + a[1] + a[2];
-                                    const float q2 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-                                    d = (s3 + std::sqrt(std::max(s3 * s3 - 3.0f * (q2 - 1.0f), 0.0f))) / 3.0f;
-                                }
-                            }
-                            const float nu = std::min(U[q], d);
-                            if (nu < U[q]) ch = true;
-                            u2[i] = nu;
-                        }
-                changed[std::size_t(b)] = ch;
+                    for (int y = 0; y < kBlockDim; ++y) {
+                        const std::size_t i0 = base + std::size_t(bidx(0, y, z));
+                        ch |= eikonal_row(U + lidx(0, y, z), mask_.data() + i0, u2.data() + i0);
+                    }
+                changed[std::size_t(b)] = std::uint8_t(ch);
             });
             std::swap(phi2_, aux_[0]);  // u <-> u2 (references follow the buffers' names)
             bool any = false;
@@ -565,34 +652,39 @@ private:
 
     enum class Conductance { One, Live, Frozen };
 
+    /// φ of every active block with its halo, held for the whole normal loop (φ does not change
+    /// there): the steps read it instead of gathering it again.
+    void cache_phi() {
+        pad_phi_.resize(active_.size() * std::size_t(L3));
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active_.size(), 16),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t k = r.begin(); k != r.end(); ++k)
+                                  gather_phi(nbh_[std::size_t(active_[k])], phi_, pad_phi_.data() + k * L3);
+                          });
+    }
+
     /// One step of the normal loop on src → dst over the active blocks; returns G(src).
-    /// update == false: only the energy.
+    /// update == false: only the energy. Reads φ from pad_phi_ and, when Frozen, g from pad_g_.
     double normal_step(std::vector<float> (&src)[3], std::vector<float> (&dst)[3], Conductance cond,
                        bool update) {
         std::vector<double> energy(active_.size(), 0.0);
         std::atomic<bool> bad{false};
         const float dt = std::min(opt_.normal_dt, kMaxDt);
         const float inv2mu2 = inv2mu2_;
-        const SmoothMode emode = cond == Conductance::Live ? SmoothMode::Anisotropic : SmoothMode::Isotropic;
         const float band = opt_.active_band;
-        for_blocks(active_, cond == Conductance::Frozen ? 17 : 14, [&](std::size_t k, std::int32_t b, Scratch& s) {
+        for_blocks(active_, 14, [&](std::size_t k, std::int32_t b, Scratch& s) {
             const Neighbourhood& n = nbh_[std::size_t(b)];
-            float* P = s.at(0);
-            float* N[3] = {s.at(1), s.at(2), s.at(3)};
-            float* F[3][3] = {{s.at(4), s.at(5), s.at(6)}, {s.at(7), s.at(8), s.at(9)}, {s.at(10), s.at(11), s.at(12)}};
-            float* G[3] = {nullptr, nullptr, nullptr};
-            gather_phi(n, phi_, P);
+            const float* P = pad_phi_.data() + k * L3;
+            float* N[3] = {s.at(0), s.at(1), s.at(2)};
+            float* F[3][3] = {{s.at(3), s.at(4), s.at(5)}, {s.at(6), s.at(7), s.at(8)}, {s.at(9), s.at(10), s.at(11)}};
+            float* K = s.at(12);  // κ² of the faces of one axis
+            float* E = s.at(13);  // Live: the penalty G(κ²) of the faces of one axis
             gather_n(n, src, N[0], N[1], N[2]);
-            if (cond == Conductance::Frozen) {
-                for (int a = 0; a < 3; ++a) {
-                    G[a] = s.at(13 + a);
-                    gather(n, gface_[a].data(), 1.0f, 1.0f, G[a]);
-                }
-            }
-            float* K = s.at(cond == Conductance::Frozen ? 16 : 13);  // κ² of the faces of one axis
             const std::size_t base = std::size_t(b) * kBlockVoxels;
+            const std::uint8_t* M = mask_.data() + base;
             double e = 0.0;
             for (int a = 0; a < 3; ++a) {
+                const float* G = cond == Conductance::Frozen ? pad_g_[a].data() + k * L3 : nullptr;
                 const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
                 int lo[3] = {0, 0, 0};
                 lo[a] = -1;
@@ -602,67 +694,59 @@ private:
                         const int q0 = lidx(lo[0], y, z);
                         bool any = false;  // a face of the row touches the band
                         for (int j = 0; j < nx; ++j)
-                            any |= !(std::abs(P[q0 + j]) > band && std::abs(P[q0 + j + sa]) > band);
+                            any |= !((std::abs(P[q0 + j]) > band) & (std::abs(P[q0 + j + sa]) > band));
                         // rows outside the band are not computed: the divergence below reads only
                         // the faces of active samples, which lie in the band
                         if (!any) continue;
-                        if (cond == Conductance::Frozen)
-                            face_row<true>(P, N[0], N[1], N[2], G[a], q0, nx, sa, sb, sc, band, F[a][0], F[a][1],
+                        if (G)
+                            face_row<true>(P, N[0], N[1], N[2], G, q0, nx, sa, sb, sc, band, F[a][0], F[a][1],
                                            F[a][2], K);
                         else
                             face_row<false>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band, F[a][0],
                                             F[a][1], F[a][2], K);
-                        if (cond == Conductance::Live)
+                        if (cond == Conductance::Live) {
+                            float* __restrict f0 = F[a][0] + q0;
+                            float* __restrict f1 = F[a][1] + q0;
+                            float* __restrict f2 = F[a][2] + q0;
+                            const float* __restrict k2 = K + q0;
+                            float* __restrict pen = E + q0;
                             for (int j = 0; j < nx; ++j) {
-                                const int q = q0 + j;
-                                if (std::abs(P[q]) > band && std::abs(P[q + sa]) > band) continue;
-                                const float g = std::exp(-K[q] * inv2mu2);
-                                for (int c = 0; c < 3; ++c) F[a][c][q] = g * F[a][c][q];
+                                const float g = exp_nonpositive(-k2[j] * inv2mu2);
+                                f0[j] *= g;  // skipped faces hold 0 and stay 0
+                                f1[j] *= g;
+                                f2[j] *= g;
+                                pen[j] = (1.0f - g) / inv2mu2;
                             }
-                    }
-                // energy of the faces owned by the active samples of this block (in band: not skipped)
-                for (int z = 0; z < kBlockDim; ++z)
-                    for (int y = 0; y < kBlockDim; ++y)
-                        for (int x = 0; x < kBlockDim; ++x) {
-                            if (!mask_[base + std::size_t(bidx(x, y, z))]) continue;
-                            const int q = lidx(x, y, z);
-                            e += cond == Conductance::Frozen ? double(G[a][q]) * K[q]
-                                                             : double(penalty(emode, K[q], inv2mu2));
                         }
+                    }
+                // energy of the faces owned by the active samples of this block (in band: computed)
+                for (int z = 0; z < kBlockDim; ++z)
+                    for (int y = 0; y < kBlockDim; ++y) {
+                        const std::uint8_t* m = M + bidx(0, y, z);
+                        const int q0 = lidx(0, y, z);
+                        for (int x = 0; x < kBlockDim; ++x) {
+                            if (!m[x]) continue;
+                            const int q = q0 + x;
+                            e += G ? double(G[q]) * K[q] : double(cond == Conductance::Live ? E[q] : K[q]);
+                        }
+                    }
             }
             energy[k] = e;
             if (!update) return;
+            // N ← normalize(N + dt (I − NNᵀ) ∇·F) at the active samples; the rest keep N. Rows of
+            // 8, branch-free (selects), so that the loop vectorises.
+            int nonfinite = 0;
             for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y)
-                    for (int x = 0; x < kBlockDim; ++x) {
-                        const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        const int q = lidx(x, y, z);
-                        if (!mask_[i]) {
-                            dst[0][i] = N[0][q];
-                            dst[1][i] = N[1][q];
-                            dst[2][i] = N[2][q];
-                            continue;
-                        }
-                        float phi_v[3];
-                        for (int c = 0; c < 3; ++c)
-                            phi_v[c] = (F[0][c][q] - F[0][c][q - 1]) + (F[1][c][q] - F[1][c][q - L]) +
-                                       (F[2][c][q] - F[2][c][q - L2]);
-                        const float nx = N[0][q], ny = N[1][q], nz = N[2][q];
-                        const float pn = phi_v[0] * nx + phi_v[1] * ny + phi_v[2] * nz;
-                        float ux = nx + dt * (phi_v[0] - pn * nx);
-                        float uy = ny + dt * (phi_v[1] - pn * ny);
-                        float uz = nz + dt * (phi_v[2] - pn * nz);
-                        const float len = std::sqrt(ux * ux + uy * uy + uz * uz);
-                        if (!std::isfinite(len)) bad = true;
-                        if (len > 1e-6f) {
-                            ux /= len;
-                            uy /= len;
-                            uz /= len;
-                        }
-                        dst[0][i] = ux;
-                        dst[1][i] = uy;
-                        dst[2][i] = uz;
-                    }
+                for (int y = 0; y < kBlockDim; ++y) {
+                    const int q0 = lidx(0, y, z);
+                    const std::size_t i0 = base + std::size_t(bidx(0, y, z));
+                    const std::uint8_t* m = mask_.data() + i0;
+                    nonfinite |= update_row(F[0][0] + q0, F[0][1] + q0, F[0][2] + q0, F[1][0] + q0, F[1][1] + q0,
+                                            F[1][2] + q0, F[2][0] + q0, F[2][1] + q0, F[2][2] + q0, N[0] + q0,
+                                            N[1] + q0, N[2] + q0, m, dt, dst[0].data() + i0, dst[1].data() + i0,
+                                            dst[2].data() + i0);
+                }
+            if (nonfinite) bad = true;
         });
         if (bad) fail("normal in the normal loop");
         double sum = 0.0;
@@ -717,13 +801,34 @@ private:
         return std::sqrt(std::max(*q, 0.0f)) / 0.3186f;
     }
 
-    /// g at every face q+½e_a of the allocated samples, from the normals in src (Catté et al.),
-    /// with the conductance scale mu.
+    /// g = exp(−κ²/(2µ²)) at every face q+½e_a of the active blocks, q = −1…7 along a and 0…7
+    /// across (all the faces a normal step reads), from the normals in src (Catté et al.), with the
+    /// conductance scale mu, into pad_g_ (the padded layout of pad_phi_).
     void conductance_from(std::vector<float> (&src)[3], float mu) {
         const float inv2mu2 = 1.0f / (2.0f * mu * mu);
-        face_curvatures(
-            src, [](std::size_t, float) { return true; },
-            [&](std::size_t, int a, std::size_t i, float k2) { gface_[a][i] = std::exp(-k2 * inv2mu2); });
+        const float band = opt_.active_band;
+        for (int a = 0; a < 3; ++a) pad_g_[a].resize(active_.size() * std::size_t(L3));
+        for_blocks(active_, 7, [&](std::size_t k, std::int32_t b, Scratch& s) {
+            const float* P = pad_phi_.data() + k * L3;
+            float* N[3] = {s.at(0), s.at(1), s.at(2)};
+            float* F = s.at(3);  // face fluxes: computed by face_row, unused here
+            float* K = s.at(6);
+            gather_n(nbh_[std::size_t(b)], src, N[0], N[1], N[2]);
+            for (int a = 0; a < 3; ++a) {
+                float* G = pad_g_[a].data() + k * L3;
+                const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
+                int lo[3] = {0, 0, 0};
+                lo[a] = -1;
+                const int nx = kBlockDim - lo[0];
+                for (int z = lo[2]; z < kBlockDim; ++z)
+                    for (int y = lo[1]; y < kBlockDim; ++y) {
+                        const int q0 = lidx(lo[0], y, z);
+                        face_row<false>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band, F, s.at(4),
+                                        s.at(5), K);
+                        for (int j = 0; j < nx; ++j) G[q0 + j] = std::exp(-K[q0 + j] * inv2mu2);
+                    }
+            }
+        });
     }
 
     /// The conductance scale of this main iteration (see SmoothOptions::mu_robust): µ, or
@@ -746,12 +851,12 @@ private:
 
     void normal_loop() {
         init_normals();
+        cache_phi();
         const bool highboost = opt_.mode == SmoothMode::HighBoost;
         Conductance cond = Conductance::One;
         if (opt_.mode == SmoothMode::Anisotropic) {
             if (opt_.conductance_presmooth_steps > 0) {
                 cond = Conductance::Frozen;
-                for (int c = 0; c < 3; ++c) std::fill(gface_[c].begin(), gface_[c].end(), 1.0f);
                 copy_fields(n_, aux_);
                 copy_fields(n_, n2_);
                 for (int s = 0; s < opt_.conductance_presmooth_steps; ++s) {
@@ -1001,7 +1106,9 @@ private:
     std::vector<std::int32_t> table_;
     std::vector<std::array<int, 3>> coords_;
     std::vector<float> phi_, phi2_, hn_;
-    std::vector<float> n_[3], n2_[3], aux_[3], gface_[3];
+    std::vector<float> n_[3], n2_[3], aux_[3];
+    std::vector<float> pad_phi_;  // per active block: φ with its halo (L³), during the normal loop
+    std::vector<float> pad_g_[3];  // per active block: frozen conductance of the faces, pad_phi_'s layout
     std::vector<std::uint8_t> mask_;
     std::vector<Neighbourhood> nbh_;  // per allocated block, rebuilt when the band moves
     mutable tbb::enumerable_thread_specific<std::vector<float>> scratch_;
