@@ -58,6 +58,9 @@ constexpr int L3 = L * L * L;
 constexpr int kStride[3] = {1, L, L2};
 
 constexpr int lidx(int x, int y, int z) { return (z + 1) * L2 + (y + 1) * L + (x + 1); }
+/// Rows of faces of one block, per axis a: (y, z) in [−1, 7]² (the faces x+½e_a, x = −1…7 or 0…7).
+constexpr int kRowFlags = 3 * 9 * 9;
+constexpr int row_flag(int a, int y, int z) { return (a * 9 + (z + 1)) * 9 + (y + 1); }
 constexpr int bidx(int x, int y, int z) { return (z * kBlockDim + y) * kBlockDim + x; }
 
 using Clock = std::chrono::steady_clock;
@@ -110,15 +113,44 @@ inline void face_terms(const float* P, const float* const N[3], int q, int sa, i
     k2 = std::max(dn2 - c2 * g2, 0.0f);
 }
 
+/// e^x for x <= 0, branch-free so that the loops calling it vectorise (expf is a library call
+/// per element): x = n ln2 + r with |r| <= ln2/2, e^r by Cephes' expf polynomial (1 + r + r²/2 + …,
+/// degree 7), 2ⁿ from the exponent bits. Within 1 ulp of expf on [−87, 0] (relative error < 8e−8,
+/// checked on every 256th float of the range); below −87 it returns
+/// e^−87 ≈ 1.6e−38 (where expf gives a denormal or 0). Plain float operations, no contraction: the
+/// same value at every vector width and on every thread.
+inline float exp_nonpositive(float x) {
+    x = std::max(x, -87.0f);
+    const float t = x * 1.44269504088896341f + 12582912.0f;  // 1.5·2²³: rounds x·log₂e to an integer
+    const float n = t - 12582912.0f;
+    const std::int32_t ni = std::bit_cast<std::int32_t>(t) - 0x4B400000;
+    const float r = (x - n * 0.693359375f) + n * 2.12194440e-4f;  // ln2 = 0.693359375 − 2.12194440e−4
+    const float r2 = r * r;
+    float p = 1.9875691500e-4f;
+    p = p * r + 1.3981999507e-3f;
+    p = p * r + 8.3334519073e-3f;
+    p = p * r + 4.1665795894e-2f;
+    p = p * r + 1.6666665459e-1f;
+    p = p * r + 5.0000001201e-1f;
+    const float er = p * r2 + r + 1.0f;
+    return er * std::bit_cast<float>((ni + 127) << 23);
+}
+
+/// How a normal step weighs the flux of a face: 1 (isotropic), a conductance g held for the whole
+/// normal loop, or the paper's g = exp(−κ²/(2µ²)) of the current normals.
+enum class FaceWeight { One, Frozen, Live };
+
 /// face_terms over one row of faces q0 … q0+n−1 (contiguous in x), branch-free so that the
 /// compiler vectorises it: the same operations in the same order as face_terms, so the results are
-/// bit-identical. F = g·m (g = G[q] when kFrozen, else 1) or 0 where both samples of the face lie
-/// outside the band (the faces the engine skips); K = κ².
-template <bool kFrozen>
+/// bit-identical. F = g·m, or 0 where both samples of the face lie outside the band (the faces the
+/// engine skips); g = 1, G[q] or exp(−κ²·inv2mu2) by kWeight. E = the face's energy density: κ²,
+/// G[q]·κ² or (1 − g)/inv2mu2 (the penalty G(κ²) of Eq. 20).
+template <FaceWeight kWeight>
 NF_ROW_KERNEL
 void face_row(const float* __restrict P, const float* __restrict N0, const float* __restrict N1,
               const float* __restrict N2, const float* __restrict G, int q0, int n, int sa, int sb, int sc,
-              float band, float* __restrict F0, float* __restrict F1, float* __restrict F2, float* __restrict K) {
+              float band, float inv2mu2, float* __restrict F0, float* __restrict F1, float* __restrict F2,
+              float* __restrict E) {
     for (int j = 0; j < n; ++j) {
         const int q = q0 + j;
         const int q1 = q + sa;
@@ -144,12 +176,27 @@ void face_row(const float* __restrict P, const float* __restrict N0, const float
         const float k2 = std::max(dn2 - c2 * g2, 0.0f);
         // a mask, not a branch (no short-circuit): the loop stays vectorisable
         const float keep = float(!((std::abs(P[q]) > band) & (std::abs(P[q1]) > band)));
-        const float g = kFrozen ? G[q] * keep : keep;
+        float g = keep, e = k2;
+        if constexpr (kWeight == FaceWeight::Frozen) {
+            g = G[q] * keep;
+            e = G[q] * k2;
+        } else if constexpr (kWeight == FaceWeight::Live) {
+            const float c = exp_nonpositive(-k2 * inv2mu2);
+            g = c * keep;
+            e = (1.0f - c) / inv2mu2;
+        }
         F0[q] = g * (a0 - dphi * C0);
         F1[q] = g * (a1 - dphi * C1);
         F2[q] = g * (a2 - dphi * C2);
-        K[q] = k2;
+        E[q] = e;
     }
+}
+
+/// Σ m[x]·E[x] over a row of 8, summed in a fixed tree (the same on every thread and vector width).
+inline float masked_row_sum(const float* __restrict E, const std::uint8_t* __restrict m) {
+    float t[kBlockDim];
+    for (int x = 0; x < kBlockDim; ++x) t[x] = m[x] ? E[x] : 0.0f;
+    return ((t[0] + t[1]) + (t[2] + t[3])) + ((t[4] + t[5]) + (t[6] + t[7]));
 }
 
 /// The update of one row of 8 samples of the normal loop: N ← normalize(N + dt (I − NNᵀ) ∇·F) where
@@ -220,28 +267,6 @@ NF_ROW_KERNEL int eikonal_row(const float* __restrict U, const std::uint8_t* __r
     return changed;
 }
 
-/// e^x for x <= 0, branch-free so that the loops calling it vectorise (expf is a library call
-/// per element): x = n ln2 + r with |r| <= ln2/2, e^r by Cephes' expf polynomial (1 + r + r²/2 + …,
-/// degree 7), 2ⁿ from the exponent bits. Within 1 ulp of expf on [−87, 0] (relative error < 8e−8,
-/// checked on every 256th float of the range); below −87 it returns
-/// e^−87 ≈ 1.6e−38 (where expf gives a denormal or 0). Plain float operations, no contraction: the
-/// same value at every vector width and on every thread.
-inline float exp_nonpositive(float x) {
-    x = std::max(x, -87.0f);
-    const float t = x * 1.44269504088896341f + 12582912.0f;  // 1.5·2²³: rounds x·log₂e to an integer
-    const float n = t - 12582912.0f;
-    const std::int32_t ni = std::bit_cast<std::int32_t>(t) - 0x4B400000;
-    const float r = (x - n * 0.693359375f) + n * 2.12194440e-4f;  // ln2 = 0.693359375 − 2.12194440e−4
-    const float r2 = r * r;
-    float p = 1.9875691500e-4f;
-    p = p * r + 1.3981999507e-3f;
-    p = p * r + 8.3334519073e-3f;
-    p = p * r + 4.1665795894e-2f;
-    p = p * r + 1.6666665459e-1f;
-    p = p * r + 5.0000001201e-1f;
-    const float er = p * r2 + r + 1.0f;
-    return er * std::bit_cast<float>((ni + 127) << 23);
-}
 
 class LevelSetEngine {
 public:
@@ -559,9 +584,10 @@ private:
                     }
         });
         if (bad) fail("distance during reinitialisation");
-        // A block whose 27-neighbourhood did not change in the last pass would compute what it
-        // already holds in both buffers (u2 = u there): it is skipped, which changes no value.
-        std::vector<std::uint8_t> changed(nb, 1);
+        // Jacobi passes. A block whose 27-neighbourhood did not change (by more than kReinitTolerance) in the last
+        // pass is skipped; the newest values of a block skipped now but computed in the last pass
+        // are copied into the buffer this pass writes, so that it always holds every block's newest.
+        std::vector<std::uint8_t> changed(nb, 1), computed(nb, 0), computed_now(nb, 0);
         std::vector<std::int32_t> todo;
         todo.reserve(nb);
         const int max_passes = int(kHalfWidth * 3);
@@ -572,8 +598,12 @@ private:
                 const Neighbourhood& n = nbh_[b];
                 bool need = false;
                 for (int k = 0; k < 27 && !need; ++k) need = n.slot[k] >= 0 && changed[std::size_t(n.slot[k])];
+                computed_now[b] = need;
                 if (need) todo.push_back(std::int32_t(b));
+                else if (computed[b])
+                    std::memcpy(u2.data() + b * kBlockVoxels, u.data() + b * kBlockVoxels, sizeof(float) * kBlockVoxels);
             }
+            std::swap(computed, computed_now);
             std::fill(changed.begin(), changed.end(), std::uint8_t(0));
             for_blocks(todo, 1, [&](std::size_t, std::int32_t b, Scratch& s) {
                 const Neighbourhood& n = nbh_[std::size_t(b)];
@@ -650,86 +680,84 @@ private:
         });
     }
 
-    enum class Conductance { One, Live, Frozen };
-
     /// φ of every active block with its halo, held for the whole normal loop (φ does not change
     /// there): the steps read it instead of gathering it again.
     void cache_phi() {
         pad_phi_.resize(active_.size() * std::size_t(L3));
+        row_band_.resize(active_.size() * std::size_t(kRowFlags));
+        const float band = opt_.active_band;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, active_.size(), 16),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t k = r.begin(); k != r.end(); ++k)
-                                  gather_phi(nbh_[std::size_t(active_[k])], phi_, pad_phi_.data() + k * L3);
+                              for (std::size_t k = r.begin(); k != r.end(); ++k) {
+                                  float* P = pad_phi_.data() + k * L3;
+                                  gather_phi(nbh_[std::size_t(active_[k])], phi_, P);
+                                  std::uint8_t* rows = row_band_.data() + k * kRowFlags;
+                                  for (int a = 0; a < 3; ++a) {
+                                      const int sa = kStride[a];
+                                      int lo[3] = {0, 0, 0};
+                                      lo[a] = -1;
+                                      for (int z = lo[2]; z < kBlockDim; ++z)
+                                          for (int y = lo[1]; y < kBlockDim; ++y) {
+                                              const int q0 = lidx(lo[0], y, z);
+                                              bool any = false;  // a face of the row touches the band
+                                              for (int j = 0; j < kBlockDim - lo[0]; ++j)
+                                                  any |= !(std::abs(P[q0 + j]) > band && std::abs(P[q0 + j + sa]) > band);
+                                              rows[row_flag(a, y, z)] = any;
+                                          }
+                                  }
+                              }
                           });
     }
 
     /// One step of the normal loop on src → dst over the active blocks; returns G(src).
     /// update == false: only the energy. Reads φ from pad_phi_ and, when Frozen, g from pad_g_.
-    double normal_step(std::vector<float> (&src)[3], std::vector<float> (&dst)[3], Conductance cond,
+    double normal_step(std::vector<float> (&src)[3], std::vector<float> (&dst)[3], FaceWeight cond,
                        bool update) {
         std::vector<double> energy(active_.size(), 0.0);
         std::atomic<bool> bad{false};
         const float dt = std::min(opt_.normal_dt, kMaxDt);
         const float inv2mu2 = inv2mu2_;
         const float band = opt_.active_band;
-        for_blocks(active_, 14, [&](std::size_t k, std::int32_t b, Scratch& s) {
+        for_blocks(active_, 13, [&](std::size_t k, std::int32_t b, Scratch& s) {
             const Neighbourhood& n = nbh_[std::size_t(b)];
             const float* P = pad_phi_.data() + k * L3;
             float* N[3] = {s.at(0), s.at(1), s.at(2)};
             float* F[3][3] = {{s.at(3), s.at(4), s.at(5)}, {s.at(6), s.at(7), s.at(8)}, {s.at(9), s.at(10), s.at(11)}};
-            float* K = s.at(12);  // κ² of the faces of one axis
-            float* E = s.at(13);  // Live: the penalty G(κ²) of the faces of one axis
+            float* E = s.at(12);  // energy density of the faces of one axis
             gather_n(n, src, N[0], N[1], N[2]);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
             const std::uint8_t* M = mask_.data() + base;
+            const std::uint8_t* rows = row_band_.data() + k * kRowFlags;
             double e = 0.0;
             for (int a = 0; a < 3; ++a) {
-                const float* G = cond == Conductance::Frozen ? pad_g_[a].data() + k * L3 : nullptr;
                 const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
                 int lo[3] = {0, 0, 0};
                 lo[a] = -1;
                 const int nx = kBlockDim - lo[0];
                 for (int z = lo[2]; z < kBlockDim; ++z)
                     for (int y = lo[1]; y < kBlockDim; ++y) {
+                        // rows whose faces all lie outside the band are not computed: the divergence
+                        // below reads only the faces of active samples, which lie in the band
+                        if (!rows[row_flag(a, y, z)]) continue;
                         const int q0 = lidx(lo[0], y, z);
-                        bool any = false;  // a face of the row touches the band
-                        for (int j = 0; j < nx; ++j)
-                            any |= !((std::abs(P[q0 + j]) > band) & (std::abs(P[q0 + j + sa]) > band));
-                        // rows outside the band are not computed: the divergence below reads only
-                        // the faces of active samples, which lie in the band
-                        if (!any) continue;
-                        if (G)
-                            face_row<true>(P, N[0], N[1], N[2], G, q0, nx, sa, sb, sc, band, F[a][0], F[a][1],
-                                           F[a][2], K);
-                        else
-                            face_row<false>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band, F[a][0],
-                                            F[a][1], F[a][2], K);
-                        if (cond == Conductance::Live) {
-                            float* __restrict f0 = F[a][0] + q0;
-                            float* __restrict f1 = F[a][1] + q0;
-                            float* __restrict f2 = F[a][2] + q0;
-                            const float* __restrict k2 = K + q0;
-                            float* __restrict pen = E + q0;
-                            for (int j = 0; j < nx; ++j) {
-                                const float g = exp_nonpositive(-k2[j] * inv2mu2);
-                                f0[j] *= g;  // skipped faces hold 0 and stay 0
-                                f1[j] *= g;
-                                f2[j] *= g;
-                                pen[j] = (1.0f - g) / inv2mu2;
-                            }
+                        switch (cond) {
+                            case FaceWeight::One:
+                                face_row<FaceWeight::One>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band,
+                                                          inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                                break;
+                            case FaceWeight::Frozen:
+                                face_row<FaceWeight::Frozen>(P, N[0], N[1], N[2], pad_g_[a].data() + k * L3, q0, nx,
+                                                             sa, sb, sc, band, inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                                break;
+                            case FaceWeight::Live:
+                                face_row<FaceWeight::Live>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band,
+                                                           inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                                break;
                         }
                     }
                 // energy of the faces owned by the active samples of this block (in band: computed)
                 for (int z = 0; z < kBlockDim; ++z)
-                    for (int y = 0; y < kBlockDim; ++y) {
-                        const std::uint8_t* m = M + bidx(0, y, z);
-                        const int q0 = lidx(0, y, z);
-                        for (int x = 0; x < kBlockDim; ++x) {
-                            if (!m[x]) continue;
-                            const int q = q0 + x;
-                            e += G ? double(G[q]) * K[q] : double(cond == Conductance::Live ? E[q] : K[q]);
-                        }
-                    }
+                    for (int y = 0; y < kBlockDim; ++y) e += masked_row_sum(E + lidx(0, y, z), M + bidx(0, y, z));
             }
             energy[k] = e;
             if (!update) return;
@@ -823,8 +851,8 @@ private:
                 for (int z = lo[2]; z < kBlockDim; ++z)
                     for (int y = lo[1]; y < kBlockDim; ++y) {
                         const int q0 = lidx(lo[0], y, z);
-                        face_row<false>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band, F, s.at(4),
-                                        s.at(5), K);
+                        face_row<FaceWeight::One>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band, inv2mu2,
+                                                  F, s.at(4), s.at(5), K);
                         for (int j = 0; j < nx; ++j) G[q0 + j] = std::exp(-K[q0 + j] * inv2mu2);
                     }
             }
@@ -853,15 +881,15 @@ private:
         init_normals();
         cache_phi();
         const bool highboost = opt_.mode == SmoothMode::HighBoost;
-        Conductance cond = Conductance::One;
+        FaceWeight cond = FaceWeight::One;
         if (opt_.mode == SmoothMode::Anisotropic) {
             if (opt_.conductance_presmooth_steps > 0) {
-                cond = Conductance::Frozen;
+                cond = FaceWeight::Frozen;
                 copy_fields(n_, aux_);
                 copy_fields(n_, n2_);
                 for (int s = 0; s < opt_.conductance_presmooth_steps; ++s) {
                     poll();
-                    normal_step(aux_, n2_, Conductance::One, true);
+                    normal_step(aux_, n2_, FaceWeight::One, true);
                     std::swap(aux_, n2_);
                 }
                 const float mu = conductance_scale(n_, aux_);
@@ -869,7 +897,7 @@ private:
                 rep_.mu.push_back(mu);
             } else {
                 rep_.mu.push_back(opt_.mu);
-                cond = Conductance::Live;
+                cond = FaceWeight::Live;
             }
         }
         if (highboost) copy_fields(n_, aux_);
@@ -1108,6 +1136,7 @@ private:
     std::vector<float> phi_, phi2_, hn_;
     std::vector<float> n_[3], n2_[3], aux_[3];
     std::vector<float> pad_phi_;  // per active block: φ with its halo (L³), during the normal loop
+    std::vector<std::uint8_t> row_band_;  // per active block: which rows of faces touch the band (row_flag)
     std::vector<float> pad_g_[3];  // per active block: frozen conductance of the faces, pad_phi_'s layout
     std::vector<std::uint8_t> mask_;
     std::vector<Neighbourhood> nbh_;  // per allocated block, rebuilt when the band moves
