@@ -9,8 +9,8 @@
 // Counters: s_per_iter (wall seconds of the main iteration, from SmoothReport), band_voxels
 // (samples processed), allocated_voxels, peak_MiB (rise of the process's peak RSS during the run,
 // Linux: reset through /proc/self/clear_refs) and bytes_per_band_voxel.
-// The optional comparison with ITK's IsotropicFourthOrderLevelSetImageFilter is not built: ITK is
-// not installed on the build machines.
+// The comparison with ITK's implementation of the same paper (AnisotropicFourthOrderLevelSetImageFilter)
+// is benchmarks/itk/nf_bench_vs_itk, built with -DNORMALFLOW_WITH_ITK=ON where ITK is installed (libinsighttoolkit5-dev).
 //
 // usage: bench_normals [--benchmark_filter=...]   e.g. --benchmark_filter='anisotropic|paper25'    (the models are skipped if shared/data is missing)
 

@@ -194,6 +194,12 @@ void face_row(const float* __restrict P, const float* __restrict N0, const float
     }
 }
 
+/// The mask of a row as 32-bit lanes: with 8-bit lanes GCC 12 vectorises a row of 8 at 128 bits
+/// only, even for AVX2; with 32-bit ones at 256.
+inline void widen_mask(const std::uint8_t* __restrict m, std::int32_t* __restrict out) {
+    for (int x = 0; x < kBlockDim; ++x) out[x] = m[x];
+}
+
 /// Σ m[x]·E[x] over a row of 8, summed in a fixed tree (the same on every thread and vector width).
 inline float masked_row_sum(const float* __restrict E, const std::uint8_t* __restrict m) {
     float t[kBlockDim];
@@ -211,6 +217,8 @@ NF_ROW_KERNEL int update_row(const float* __restrict fx0, const float* __restric
                const float* __restrict n0, const float* __restrict n1, const float* __restrict n2,
                const std::uint8_t* __restrict m, float dt, float* __restrict d0, float* __restrict d1,
                float* __restrict d2) {
+    std::int32_t mi[kBlockDim];
+    widen_mask(m, mi);
     int nonfinite = 0;
     for (int x = 0; x < kBlockDim; ++x) {
         const float v0 = (fx0[x] - fx0[x - 1]) + (fy0[x] - fy0[x - L]) + (fz0[x] - fz0[x - L2]);
@@ -222,7 +230,7 @@ NF_ROW_KERNEL int update_row(const float* __restrict fx0, const float* __restric
         const float uy = ny + dt * (v1 - pn * ny);
         const float uz = nz + dt * (v2 - pn * nz);
         const float len = std::sqrt(ux * ux + uy * uy + uz * uz);
-        const bool act = m[x] != 0;
+        const bool act = mi[x] != 0;
         nonfinite |= int(act & !(len <= std::numeric_limits<float>::max()));
         const float div = len > 1e-6f ? len : 1.0f;
         d0[x] = act ? ux / div : nx;
@@ -232,14 +240,65 @@ NF_ROW_KERNEL int update_row(const float* __restrict fx0, const float* __restric
     return nonfinite;
 }
 
+/// The refit terms of one axis at the samples of a row: H_φ's staggered part (Eq. 54), the
+/// upwind squared gradients for F > 0 / F < 0 and the central difference.
+template <int sa, int sb, int sc>
+inline void refit_axis(const float* __restrict P, int x, float& H, float& gp2, float& gm2, float& gc) {
+    const float p = P[x];
+    const float dp = P[x + sa] - p;
+    const float dm = p - P[x - sa];
+    const float bp = 0.25f * ((P[x + sb] - P[x - sb]) + (P[x + sa + sb] - P[x + sa - sb]));
+    const float cp = 0.25f * ((P[x + sc] - P[x - sc]) + (P[x + sa + sc] - P[x + sa - sc]));
+    const float bm = 0.25f * ((P[x + sb] - P[x - sb]) + (P[x - sa + sb] - P[x - sa - sb]));
+    const float cm = 0.25f * ((P[x + sc] - P[x - sc]) + (P[x - sa + sc] - P[x - sa - sc]));
+    const float np = std::sqrt(dp * dp + bp * bp + cp * cp);
+    const float nm = std::sqrt(dm * dm + bm * bm + cm * cm);
+    H += dp / std::max(np, 1e-6f) - dm / std::max(nm, 1e-6f);
+    const float dmp = std::max(dm, 0.0f), dmn = std::min(dm, 0.0f);
+    const float dpp = std::max(dp, 0.0f), dpn = std::min(dp, 0.0f);
+    gp2 += dmp * dmp + dpn * dpn;
+    gm2 += dmn * dmn + dpp * dpp;
+    gc = 0.5f * (dp + dm);
+}
+
+/// One refit step on a row of 8 samples: out = φ + dt |∇φ|_upwind (H_φ − hn) where m (the active
+/// samples), φ elsewhere. P points at the row's first sample in the padded local buffer. For D:
+/// gnorm = |∇φ| and gdot = ∇φ·N (central differences). Branch-free, so that it vectorises.
+/// Returns 1 if an active result is not finite.
+NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m,
+                            const float* __restrict n0, const float* __restrict n1, const float* __restrict n2,
+                            float dt, float* __restrict out, float* __restrict gnorm, float* __restrict gdot) {
+    std::int32_t mi[kBlockDim];
+    widen_mask(m, mi);
+    int nonfinite = 0;
+    for (int x = 0; x < kBlockDim; ++x) {
+        float H = 0.0f, gp2 = 0.0f, gm2 = 0.0f, g0, g1, g2;
+        refit_axis<kStride[0], kStride[1], kStride[2]>(P, x, H, gp2, gm2, g0);
+        refit_axis<kStride[1], kStride[2], kStride[0]>(P, x, H, gp2, gm2, g1);
+        refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2, g2);
+        const float rhs = H - hn[x];  // φ_t = |∇φ| rhs, speed F = −rhs
+        const float grad = std::sqrt(rhs < 0.0f ? gp2 : gm2);
+        const float v = P[x] + dt * grad * rhs;
+        const bool act = mi[x] != 0;
+        nonfinite |= int(act & !(std::abs(v) <= std::numeric_limits<float>::max()));
+        out[x] = act ? v : P[x];
+        gnorm[x] = std::sqrt(g0 * g0 + g1 * g1 + g2 * g2);
+        gdot[x] = g0 * n0[x] + g1 * n1[x] + g2 * n2[x];
+    }
+    return nonfinite;
+}
+
 /// One Jacobi pass of the unsigned distance on a row of 8 samples: where m is set the sample is
 /// fixed (out = U), elsewhere out = min(U, the Godunov upwind solution of |∇u| = 1 from the smaller
 /// neighbour per axis, h = 1). U points at the row's first sample in the padded local buffer.
 /// Branch-free (a sorting network and selects) so that it vectorises; the same values as solving
 /// with the sorted neighbours a0 <= a1 <= a2 in turn: a0 + 1, then the 2-D, then the 3-D root.
-/// Returns 1 when a free sample decreased by more than kReinitTolerance.
-NF_ROW_KERNEL int eikonal_row(const float* __restrict U, const std::uint8_t* __restrict m,
-                                  float* __restrict out) {
+/// Returns 1 when a free sample decreased by more than kReinitTolerance to below limit (a value
+/// depends only on smaller ones, so the samples below limit converge whatever happens above it).
+NF_ROW_KERNEL int eikonal_row(const float* __restrict U, const std::uint8_t* __restrict m, float limit,
+                              float* __restrict out) {
+    std::int32_t mi[kBlockDim];
+    widen_mask(m, mi);
     int changed = 0;
     for (int x = 0; x < kBlockDim; ++x) {
         const float c = U[x];
@@ -262,8 +321,8 @@ NF_ROW_KERNEL int eikonal_row(const float* __restrict U, const std::uint8_t* __r
         const float d3 = (s3 + std::sqrt(std::max(s3 * s3 - 3.0f * (q2 - 1.0f), 0.0f))) / 3.0f;
         const float d = d1 > a1 ? (d2 > a2 ? d3 : d2) : d1;
         const float nu = std::min(c, d);
-        const bool fixed = m[x] != 0;
-        changed |= int(!fixed & (c - nu > kReinitTolerance));
+        const bool fixed = mi[x] != 0;
+        changed |= int(!fixed & (c - nu > kReinitTolerance) & (nu < limit));
         out[x] = fixed ? c : nu;
     }
     return changed;
@@ -309,7 +368,7 @@ public:
     void run() {
         const auto t_band = Clock::now();
         update_band();
-        reinitialise();
+        reinitialise(opt_.iterations > 0 ? working_limit() : kHalfWidth);
         rep_.seconds_reinit += seconds_since(t_band);
         for (int it = 0; it < opt_.iterations; ++it) {
             const auto t_it = Clock::now();
@@ -336,12 +395,19 @@ public:
             }
             const auto t2 = Clock::now();
             update_band();
-            reinitialise();
+            reinitialise(it + 1 < opt_.iterations ? working_limit() : kHalfWidth);
             rep_.seconds_reinit += seconds_since(t2);
             rep_.seconds_per_iteration.push_back(seconds_since(t_it));
             rep_.iterations = it + 1;
         }
     }
+
+    /// The distances a main iteration reads are exact below this (voxels); above, φ need only be at
+    /// least this. The normal loop and the refit read φ at the active samples (|φ| <= active_band)
+    /// and at their neighbours up to 2 voxels away (tangential gradients at the faces, curvature);
+    /// one voxel more for safety. The last reinitialisation, whose φ is returned, is exact to
+    /// kHalfWidth.
+    float working_limit() const { return std::min(kHalfWidth, opt_.active_band + 3.0f); }
 
     void write_back(Volume& v) const {
         const float h = float(v.grid.voxel_size);
@@ -385,43 +451,60 @@ private:
                 }
     }
 
-    /// Copies field f (with halo 1) into out; unallocated blocks give t_in / t_out.
-    /// Row by row: the 8 interior samples of a row come from one block (one memcpy or fill).
-    static void gather(const Neighbourhood& n, const float* f, float t_in, float t_out, float* out) {
+    /// Copies K fields f[k] (with halo 1) into out[k]; unallocated blocks give t_in / t_out.
+    /// Row by row: the 8 interior samples of a row come from one block (one copy or fill); where
+    /// each row's samples come from is worked out once for all K fields.
+    template <int K>
+    static void gather_k(const Neighbourhood& n, const float* const (&f)[K], float t_in, float t_out,
+                         float* const (&out)[K]) {
+        auto src = [&](std::int32_t s, int idx) -> std::ptrdiff_t {  // offset, or -1 / -2 for a tile
+            return s >= 0 ? std::ptrdiff_t(s) * kBlockVoxels + idx : std::ptrdiff_t(s);
+        };
+        auto value = [&](const float* fk, std::ptrdiff_t o) {
+            return o >= 0 ? fk[o] : (o == kBlockInside ? t_in : t_out);
+        };
         for (int z = 0; z < L; ++z) {
             const int nz = n.nb[2][z], lz = n.li[2][z];
             for (int y = 0; y < L; ++y) {
                 const int ny = n.nb[1][y], ly = n.li[1][y];
                 const int row = (lz * kBlockDim + ly) * kBlockDim;
                 const std::int32_t* srow = n.slot + (nz * 3 + ny) * 3;
-                float* o = out + (z * L + y) * L;
-                auto fetch = [&](int x) {
-                    const std::int32_t s = srow[n.nb[0][x]];
-                    return s >= 0 ? f[std::size_t(s) * kBlockVoxels + row + n.li[0][x]]
-                                  : (s == kBlockInside ? t_in : t_out);
-                };
-                o[0] = fetch(0);
+                const int q = (z * L + y) * L;
+                const std::ptrdiff_t left = src(srow[n.nb[0][0]], row + n.li[0][0]);
+                const std::ptrdiff_t right = src(srow[n.nb[0][L - 1]], row + n.li[0][L - 1]);
                 if (n.contiguous_x) {
-                    const std::int32_t s = srow[1];
-                    if (s >= 0)
-                        std::memcpy(o + 1, f + std::size_t(s) * kBlockVoxels + row, sizeof(float) * kBlockDim);
-                    else
-                        std::fill(o + 1, o + 1 + kBlockDim, s == kBlockInside ? t_in : t_out);
+                    const std::ptrdiff_t mid = src(srow[1], row);
+                    for (int k = 0; k < K; ++k) {
+                        float* o = out[k] + q;
+                        o[0] = value(f[k], left);
+                        if (mid >= 0)
+                            std::memcpy(o + 1, f[k] + mid, sizeof(float) * kBlockDim);
+                        else
+                            std::fill(o + 1, o + 1 + kBlockDim, mid == kBlockInside ? t_in : t_out);
+                        o[L - 1] = value(f[k], right);
+                    }
                 } else {
-                    for (int x = 1; x <= kBlockDim; ++x) o[x] = fetch(x);
+                    for (int x = 0; x < L; ++x) {
+                        const std::ptrdiff_t o = src(srow[n.nb[0][x]], row + n.li[0][x]);
+                        for (int k = 0; k < K; ++k) out[k][q + x] = value(f[k], o);
+                    }
                 }
-                o[L - 1] = fetch(L - 1);
             }
         }
+    }
+    static void gather(const Neighbourhood& n, const float* f, float t_in, float t_out, float* out) {
+        const float* fs[1] = {f};
+        float* os[1] = {out};
+        gather_k<1>(n, fs, t_in, t_out, os);
     }
     void gather_phi(const Neighbourhood& n, const std::vector<float>& f, float* out) const {
         gather(n, f.data(), -kHalfWidth, kHalfWidth, out);
     }
     void gather_n(const Neighbourhood& n, const std::vector<float> (&f)[3], float* out0, float* out1,
                   float* out2) const {
-        gather(n, f[0].data(), 0.0f, 0.0f, out0);
-        gather(n, f[1].data(), 0.0f, 0.0f, out1);
-        gather(n, f[2].data(), 0.0f, 0.0f, out2);
+        const float* fs[3] = {f[0].data(), f[1].data(), f[2].data()};
+        float* os[3] = {out0, out1, out2};
+        gather_k<3>(n, fs, 0.0f, 0.0f, os);
     }
 
     /// parallel_for over a list of block slots; body(slot, scratch).
@@ -544,7 +627,9 @@ private:
 
     /// φ ← signed distance in the band: interface samples keep φ/|∇φ| (bounded by the distance to
     /// the axis crossings of the zero level), the others get Jacobi sweeps of the Godunov update.
-    void reinitialise() {
+    /// The sweeps stop when the distances below limit have converged; those at or above it are
+    /// then at least limit (the sweeps only lower an upper bound), not necessarily converged.
+    void reinitialise(float limit) {
         const std::size_t nb = nblocks();
         std::vector<std::int32_t> all(nb);
         for (std::size_t b = 0; b < nb; ++b) all[b] = std::int32_t(b);
@@ -616,7 +701,7 @@ private:
                 for (int z = 0; z < kBlockDim; ++z)
                     for (int y = 0; y < kBlockDim; ++y) {
                         const std::size_t i0 = base + std::size_t(bidx(0, y, z));
-                        ch |= eikonal_row(U + lidx(0, y, z), mask_.data() + i0, u2.data() + i0);
+                        ch |= eikonal_row(U + lidx(0, y, z), mask_.data() + i0, limit, u2.data() + i0);
                     }
                 changed[std::size_t(b)] = std::uint8_t(ch);
             });
@@ -1003,48 +1088,20 @@ private:
             float* P = s.at(0);
             gather_phi(n, phi_, P);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
+            float gnorm[kBlockDim], gdot[kBlockDim];
             double e = 0.0;
+            int nonfinite = 0;
             for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y)
-                    for (int x = 0; x < kBlockDim; ++x) {
-                        const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        const int q = lidx(x, y, z);
-                        const float p = P[q];
-                        if (!mask_[i]) {
-                            phi2_[i] = p;
-                            continue;
-                        }
-                        // H_φ with the smallest support (Eq. 54): staggered magnitudes on the 2×3 stencil
-                        float H = 0.0f;
-                        float gp2 = 0.0f, gm2 = 0.0f;  // upwind gradient, F > 0 / F < 0
-                        float gc[3];
-                        for (int a = 0; a < 3; ++a) {
-                            const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
-                            const float dp = P[q + sa] - p;
-                            const float dm = p - P[q - sa];
-                            const float bp = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q + sa + sb] - P[q + sa - sb]));
-                            const float cp = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q + sa + sc] - P[q + sa - sc]));
-                            const float bm = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q - sa + sb] - P[q - sa - sb]));
-                            const float cm = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q - sa + sc] - P[q - sa - sc]));
-                            const float np = std::sqrt(dp * dp + bp * bp + cp * cp);
-                            const float nm = std::sqrt(dm * dm + bm * bm + cm * cm);
-                            H += dp / std::max(np, 1e-6f) - dm / std::max(nm, 1e-6f);
-                            const float dmp = std::max(dm, 0.0f), dmn = std::min(dm, 0.0f);
-                            const float dpp = std::max(dp, 0.0f), dpn = std::min(dp, 0.0f);
-                            gp2 += dmp * dmp + dpn * dpn;
-                            gm2 += dmn * dmn + dpp * dpp;
-                            gc[a] = 0.5f * (dp + dm);
-                        }
-                        const float rhs = H - hn_[i];  // φ_t = |∇φ| rhs, speed F = −rhs
-                        const float grad = std::sqrt(rhs < 0.0f ? gp2 : gm2);
-                        const float v = p + dt * grad * rhs;
-                        if (!std::isfinite(v)) bad = true;
-                        phi2_[i] = v;
-                        if (with_energy) {
-                            const float gn = std::sqrt(gc[0] * gc[0] + gc[1] * gc[1] + gc[2] * gc[2]);
-                            e += double(gn) - double(gc[0] * n_[0][i] + gc[1] * n_[1][i] + gc[2] * n_[2][i]);
-                        }
-                    }
+                for (int y = 0; y < kBlockDim; ++y) {
+                    const std::size_t i0 = base + std::size_t(bidx(0, y, z));
+                    const std::uint8_t* m = mask_.data() + i0;
+                    nonfinite |= refit_row(P + lidx(0, y, z), hn_.data() + i0, m, n_[0].data() + i0,
+                                           n_[1].data() + i0, n_[2].data() + i0, dt, phi2_.data() + i0, gnorm, gdot);
+                    if (with_energy)
+                        for (int x = 0; x < kBlockDim; ++x)
+                            if (m[x]) e += double(gnorm[x]) - double(gdot[x]);
+                }
+            if (nonfinite) bad = true;
             energy[k] = e;
         });
         if (bad) fail("phi in the refit");
