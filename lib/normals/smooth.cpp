@@ -200,6 +200,13 @@ inline void widen_mask(const std::uint8_t* __restrict m, std::int32_t* __restric
     for (int x = 0; x < kBlockDim; ++x) out[x] = m[x];
 }
 
+/// Whether a row of 8 mask bytes has any set.
+inline bool any_in_row(const std::uint8_t* m) {
+    std::uint64_t w;
+    std::memcpy(&w, m, sizeof w);
+    return w != 0;
+}
+
 /// Σ m[x]·E[x] over a row of 8, summed in a fixed tree (the same on every thread and vector width).
 inline float masked_row_sum(const float* __restrict E, const std::uint8_t* __restrict m) {
     float t[kBlockDim];
@@ -820,28 +827,45 @@ private:
                 const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
                 int lo[3] = {0, 0, 0};
                 lo[a] = -1;
-                const int nx = kBlockDim - lo[0];
-                for (int z = lo[2]; z < kBlockDim; ++z)
-                    for (int y = lo[1]; y < kBlockDim; ++y) {
-                        // rows whose faces all lie outside the band are not computed: the divergence
-                        // below reads only the faces of active samples, which lie in the band
-                        if (!rows[row_flag(a, y, z)]) continue;
-                        const int q0 = lidx(lo[0], y, z);
-                        switch (cond) {
-                            case FaceWeight::One:
-                                face_row<FaceWeight::One>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band,
-                                                          inv2mu2, F[a][0], F[a][1], F[a][2], E);
-                                break;
-                            case FaceWeight::Frozen:
-                                face_row<FaceWeight::Frozen>(P, N[0], N[1], N[2], pad_g_[a].data() + k * L3, q0, nx,
-                                                             sa, sb, sc, band, inv2mu2, F[a][0], F[a][1], F[a][2], E);
-                                break;
-                            case FaceWeight::Live:
-                                face_row<FaceWeight::Live>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band,
-                                                           inv2mu2, F[a][0], F[a][1], F[a][2], E);
-                                break;
-                        }
+                auto faces = [&](int q0, int count) {
+                    switch (cond) {
+                        case FaceWeight::One:
+                            face_row<FaceWeight::One>(P, N[0], N[1], N[2], nullptr, q0, count, sa, sb, sc, band,
+                                                      inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                            break;
+                        case FaceWeight::Frozen:
+                            face_row<FaceWeight::Frozen>(P, N[0], N[1], N[2], pad_g_[a].data() + k * L3, q0, count,
+                                                         sa, sb, sc, band, inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                            break;
+                        case FaceWeight::Live:
+                            face_row<FaceWeight::Live>(P, N[0], N[1], N[2], nullptr, q0, count, sa, sb, sc, band,
+                                                       inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                            break;
                     }
+                };
+                // Rows whose faces all lie outside the band are not computed: the divergence below
+                // reads only the faces of active samples, which lie in the band.
+                if (a == 0) {
+                    // x faces, 9 per row (x = −1 … 7): the flagged rows of a z plane in one run over
+                    // the padded buffer, rounded up to whole vectors, instead of a row of 8 plus a
+                    // scalar ninth face each. The extra faces (x = 8, and unflagged rows inside the
+                    // run) lie in the buffer and are never read.
+                    for (int z = 0; z < kBlockDim; ++z) {
+                        int y0 = kBlockDim, y1 = -1;
+                        for (int y = 0; y < kBlockDim; ++y)
+                            if (rows[row_flag(0, y, z)]) {
+                                y0 = std::min(y0, y);
+                                y1 = y;
+                            }
+                        if (y1 < 0) continue;
+                        const int count = ((y1 - y0) * L + (kBlockDim + 1) + (kBlockDim - 1)) / kBlockDim * kBlockDim;
+                        faces(lidx(-1, y0, z), count);
+                    }
+                } else {
+                    for (int z = lo[2]; z < kBlockDim; ++z)
+                        for (int y = lo[1]; y < kBlockDim; ++y)
+                            if (rows[row_flag(a, y, z)]) faces(lidx(0, y, z), kBlockDim);
+                }
                 // energy of the faces owned by the active samples of this block (in band: computed)
                 for (int z = 0; z < kBlockDim; ++z)
                     for (int y = 0; y < kBlockDim; ++y) e += masked_row_sum(E + lidx(0, y, z), M + bidx(0, y, z));
@@ -856,6 +880,7 @@ private:
                     const int q0 = lidx(0, y, z);
                     const std::size_t i0 = base + std::size_t(bidx(0, y, z));
                     const std::uint8_t* m = mask_.data() + i0;
+                    if (!any_in_row(m)) continue;  // dst already holds these samples' N (see normal_loop)
                     nonfinite |= update_row(F[0][0] + q0, F[0][1] + q0, F[0][2] + q0, F[1][0] + q0, F[1][1] + q0,
                                             F[1][2] + q0, F[2][0] + q0, F[2][1] + q0, F[2][2] + q0, N[0] + q0,
                                             N[1] + q0, N[2] + q0, m, dt, dst[0].data() + i0, dst[1].data() + i0,
@@ -1095,6 +1120,7 @@ private:
                 for (int y = 0; y < kBlockDim; ++y) {
                     const std::size_t i0 = base + std::size_t(bidx(0, y, z));
                     const std::uint8_t* m = mask_.data() + i0;
+                    if (!any_in_row(m)) continue;  // phi2_ already holds these samples' φ (see refit_loop)
                     nonfinite |= refit_row(P + lidx(0, y, z), hn_.data() + i0, m, n_[0].data() + i0,
                                            n_[1].data() + i0, n_[2].data() + i0, dt, phi2_.data() + i0, gnorm, gdot);
                     if (with_energy)

@@ -509,6 +509,31 @@ TEST(SmoothVolume, BandFollowsTheSurfaceAndKeepsTheInvariant) {
     EXPECT_LT(worst, 0.15);
 }
 
+TEST(SmoothVolume, ReturnedPhiIsTheDistanceOutToTheHalfWidth) {
+    // Between main iterations the engine keeps φ exact only as far as an iteration reads it
+    // (active_band + 3 voxels); the φ it returns must be the distance out to the half width (8).
+    const Vec3d c(24, 24, 24);
+    const double r = 12.0;
+    Volume v = make_volume(48, 1.0, sphere_sdf(c, r));
+    smooth_volume(v, options(SmoothMode::Isotropic, 2));
+    const RadialStats st = radial_stats(v, c);
+    ASSERT_LT(st.max_deviation, 0.2);
+    double worst = 0;
+    std::size_t far = 0;
+    for (int k = 0; k < 48; ++k)
+        for (int j = 0; j < 48; ++j)
+            for (int i = 0; i < 48; ++i) {
+                const float p = v.value(i, j, k);
+                if (std::abs(p) < 5.0f || std::abs(p) >= 8.0f) continue;
+                const double d = norm(Vec3d(i, j, k) - c) - st.mean_radius;
+                if (std::abs(d) >= 7.8) continue;  // the far edge of the band: φ is clamped at 8
+                worst = std::max(worst, std::abs(double(p) - d));
+                far += std::abs(d) > 7.0;
+            }
+    EXPECT_GT(far, 1000u);
+    EXPECT_LT(worst, 0.5);  // the first-order Godunov distance of a sphere: 0.42 here
+}
+
 class StopAfter : public Progress {
 public:
     explicit StopAfter(int n) : n_(n) {}
