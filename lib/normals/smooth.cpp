@@ -146,13 +146,14 @@ enum class FaceWeight { One, Frozen, Live };
 /// compiler vectorises it: the same operations in the same order as face_terms, so the results are
 /// bit-identical. F = g·m, or 0 where both samples of the face lie outside the band (the faces the
 /// engine skips); g = 1, G[q] or exp(−κ²·inv2mu2) by kWeight. E = the face's energy density: κ²,
-/// G[q]·κ² or (1 − g)/inv2mu2 (the penalty G(κ²) of Eq. 20).
+/// G[q]·κ² or (1 − g)·2µ² (the penalty G(κ²) of Eq. 20; a product, not penalty()'s quotient: the reported G may differ in the last bit).
 template <FaceWeight kWeight>
 NF_ROW_KERNEL
 void face_row(const float* __restrict P, const float* __restrict N0, const float* __restrict N1,
               const float* __restrict N2, const float* __restrict G, int q0, int n, int sa, int sb, int sc,
               float band, float inv2mu2, float* __restrict F0, float* __restrict F1, float* __restrict F2,
               float* __restrict E) {
+    const float two_mu2 = 1.0f / inv2mu2;  // E of Live as a product: a division per face costs more
     for (int j = 0; j < n; ++j) {
         const int q = q0 + j;
         const int q1 = q + sa;
@@ -185,7 +186,7 @@ void face_row(const float* __restrict P, const float* __restrict N0, const float
         } else if constexpr (kWeight == FaceWeight::Live) {
             const float c = exp_nonpositive(-k2 * inv2mu2);
             g = c * keep;
-            e = (1.0f - c) / inv2mu2;
+            e = (1.0f - c) * two_mu2;
         }
         F0[q] = g * (a0 - dphi * C0);
         F1[q] = g * (a1 - dphi * C1);
