@@ -146,7 +146,8 @@ enum class FaceWeight { One, Frozen, Live };
 /// compiler vectorises it: the same operations in the same order as face_terms, so the results are
 /// bit-identical. F = g·m, or 0 where both samples of the face lie outside the band (the faces the
 /// engine skips); g = 1, G[q] or exp(−κ²·inv2mu2) by kWeight. E = the face's energy density: κ²,
-/// G[q]·κ² or (1 − g)·2µ² (the penalty G(κ²) of Eq. 20; a product, not penalty()'s quotient: the reported G may differ in the last bit).
+/// G[q]·κ² or (1 − g)·2µ² (the penalty G(κ²) of Eq. 20, as a product where penalty() divides: the
+/// reported G may differ in the last bit, the normals do not).
 template <FaceWeight kWeight>
 NF_ROW_KERNEL
 void face_row(const float* __restrict P, const float* __restrict N0, const float* __restrict N1,
