@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "nf_bench_quality: no pairs under %s (pairs_gnf, pairs_gcn)\n", data.string().c_str());
         return 1;
     }
-    std::printf("resolution %d, iterations %d, normal_steps %d, normal_dt %g, mu %g, presmooth %d, samples %zu\n",
+    std::printf("resolution %d, iterations %d (0: the mode's default), normal_steps %d, normal_dt %g, mu %g, presmooth %d, samples %zu\n",
                 resolution, base.iterations, base.normal_steps, double(base.normal_dt), double(base.mu),
                 base.conductance_presmooth_steps, sampling.samples);
     std::printf("%-28s %-11s %10s %10s %10s %9s %9s\n", "pair", "result", "mean(vox)", "rms(vox)", "haus(vox)",
@@ -161,9 +161,11 @@ int main(int argc, char** argv) {
                     fs::create_directories(out);
                     write_mesh((out / (p.noisy.stem().string() + "_" + key + ".ply")).string(), m);
                 }
-                if (!rep.mu.empty())
-                    std::printf("%-28s %-11s mu per iteration: %.3f ... %.3f\n", p.name.c_str(), "", double(rep.mu.front()),
-                                double(rep.mu.back()));
+                if (!rep.mu.empty()) {
+                    std::printf("%-28s %-11s mu per iteration:", p.name.c_str(), "");
+                    for (const float m : rep.mu) std::printf(" %.3f", double(m));
+                    std::printf("\n");
+                }
             }
         } catch (const std::exception& e) {
             std::fprintf(stderr, "%s: %s\n", p.name.c_str(), e.what());

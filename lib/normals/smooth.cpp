@@ -342,6 +342,7 @@ class LevelSetEngine {
 public:
     LevelSetEngine(const Volume& v, const SmoothOptions& opt, SmoothReport& rep, Progress* progress)
         : grid_(v.grid), opt_(opt), rep_(rep), progress_(progress) {
+        if (opt_.iterations == 0) opt_.iterations = default_iterations(opt_.mode);
         block_dims_ = v.block_dims;
         table_ = v.block_table;
         coords_ = v.block_coords;
@@ -1234,7 +1235,7 @@ private:
 
 void validate(const Volume& v, const SmoothOptions& opt) {
     auto bad = [](const std::string& m) { throw InvalidInput("smooth_volume: " + m); };
-    if (opt.iterations < 1) bad("iterations must be >= 1, got " + std::to_string(opt.iterations));
+    if (opt.iterations < 0) bad("iterations must be >= 0 (0: the mode's default), got " + std::to_string(opt.iterations));
     if (opt.normal_steps < 1) bad("normal_steps must be >= 1, got " + std::to_string(opt.normal_steps));
     if (!(opt.mu > 0.0f) || !std::isfinite(opt.mu)) bad("mu must be > 0, got " + std::to_string(opt.mu));
     if (!(opt.alpha >= 0.0f) || !std::isfinite(opt.alpha)) bad("alpha must be >= 0, got " + std::to_string(opt.alpha));
@@ -1272,6 +1273,8 @@ void validate(const Volume& v, const SmoothOptions& opt) {
 
 }  // namespace
 }  // namespace detail
+
+int default_iterations(SmoothMode mode) { return mode == SmoothMode::Anisotropic ? 16 : 8; }
 
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt, Progress* progress) {
     detail::validate(v, opt);

@@ -592,7 +592,7 @@ TEST(SmoothVolume, OptionsOutOfRangeThrowInvalidInput) {
         EXPECT_EQ(v.values, v0.values) << field << ": volume changed";
     };
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    expect_bad([](SmoothOptions& o) { o.iterations = 0; }, "iterations");
+    expect_bad([](SmoothOptions& o) { o.iterations = -1; }, "iterations");
     expect_bad([](SmoothOptions& o) { o.normal_steps = 0; }, "normal_steps");
     expect_bad([](SmoothOptions& o) { o.mu = 0.0f; }, "mu");
     expect_bad([&](SmoothOptions& o) { o.mu = nan; }, "mu");
@@ -610,6 +610,24 @@ TEST(SmoothVolume, OptionsOutOfRangeThrowInvalidInput) {
     Volume broken = v0;
     broken.values.pop_back();
     EXPECT_THROW(smooth_volume(broken), InvalidInput);
+}
+
+TEST(SmoothVolume, ZeroIterationsRunsTheModesDefault) {
+    // iterations = 0 (the default) runs default_iterations(mode): anisotropic needs twice the
+    // isotropic count (its robust µ takes several iterations to come down, benchmarks/README.md)
+    EXPECT_EQ(default_iterations(SmoothMode::Anisotropic), 16);
+    EXPECT_EQ(default_iterations(SmoothMode::Isotropic), 8);
+    EXPECT_EQ(default_iterations(SmoothMode::MeanCurvature), 8);
+    EXPECT_EQ(SmoothOptions{}.iterations, 0);
+    for (const SmoothMode mode : {SmoothMode::Anisotropic, SmoothMode::Isotropic}) {
+        Volume v = make_volume(20, 1.0, sphere_sdf(Vec3d(10.2, 9.9, 10.1), 5.0));
+        SmoothOptions o = options(mode, 0);
+        o.normal_steps = 1;
+        o.refit_max_steps = 1;
+        const SmoothReport rep = smooth_volume(v, o);
+        EXPECT_EQ(rep.iterations, default_iterations(mode)) << to_string(mode);
+        EXPECT_EQ(rep.seconds_per_iteration.size(), std::size_t(default_iterations(mode))) << to_string(mode);
+    }
 }
 
 TEST(SmoothVolume, LargeTimeStepsAreClampedWithAWarning) {
