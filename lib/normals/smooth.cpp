@@ -250,9 +250,9 @@ NF_ROW_KERNEL int update_row(const float* __restrict fx0, const float* __restric
 }
 
 /// The refit terms of one axis at the samples of a row: H_φ's staggered part (Eq. 54), the
-/// upwind squared gradients for F > 0 / F < 0 and the central difference.
+/// upwind squared gradients for F > 0 / F < 0.
 template <int sa, int sb, int sc>
-inline void refit_axis(const float* __restrict P, int x, float& H, float& gp2, float& gm2, float& gc) {
+inline void refit_axis(const float* __restrict P, int x, float& H, float& gp2, float& gm2) {
     const float p = P[x];
     const float dp = P[x + sa] - p;
     const float dm = p - P[x - sa];
@@ -267,34 +267,49 @@ inline void refit_axis(const float* __restrict P, int x, float& H, float& gp2, f
     const float dpp = std::max(dp, 0.0f), dpn = std::min(dp, 0.0f);
     gp2 += dmp * dmp + dpn * dpn;
     gm2 += dmn * dmn + dpp * dpp;
-    gc = 0.5f * (dp + dm);
 }
 
 /// One refit step on a row of 8 samples: out = φ + dt |∇φ|_upwind (H_φ − hn) where m (the active
-/// samples), φ elsewhere. P points at the row's first sample in the padded local buffer. For D:
-/// gnorm = |∇φ| and gdot = ∇φ·N (central differences). Branch-free, so that it vectorises.
+/// samples), φ elsewhere. P points at the row's first sample in the padded local buffer.
+/// Branch-free, so that it vectorises.
 /// Returns 1 if an active result is not finite.
 NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m,
-                            const float* __restrict n0, const float* __restrict n1, const float* __restrict n2,
-                            float dt, float* __restrict out, float* __restrict gnorm, float* __restrict gdot) {
+                            float dt, float* __restrict out) {
     std::int32_t mi[kBlockDim];
     widen_mask(m, mi);
     int nonfinite = 0;
     for (int x = 0; x < kBlockDim; ++x) {
-        float H = 0.0f, gp2 = 0.0f, gm2 = 0.0f, g0, g1, g2;
-        refit_axis<kStride[0], kStride[1], kStride[2]>(P, x, H, gp2, gm2, g0);
-        refit_axis<kStride[1], kStride[2], kStride[0]>(P, x, H, gp2, gm2, g1);
-        refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2, g2);
+        float H = 0.0f, gp2 = 0.0f, gm2 = 0.0f;
+        refit_axis<kStride[0], kStride[1], kStride[2]>(P, x, H, gp2, gm2);
+        refit_axis<kStride[1], kStride[2], kStride[0]>(P, x, H, gp2, gm2);
+        refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2);
         const float rhs = H - hn[x];  // φ_t = |∇φ| rhs, speed F = −rhs
         const float grad = std::sqrt(rhs < 0.0f ? gp2 : gm2);
         const float v = P[x] + dt * grad * rhs;
         const bool act = mi[x] != 0;
         nonfinite |= int(act & !(std::abs(v) <= std::numeric_limits<float>::max()));
         out[x] = act ? v : P[x];
-        gnorm[x] = std::sqrt(g0 * g0 + g1 * g1 + g2 * g2);
-        gdot[x] = g0 * n0[x] + g1 * n1[x] + g2 * n2[x];
     }
     return nonfinite;
+}
+
+/// The refit energy D = Σ (|∇φ| − ∇φ·N) over the active samples of a row of 8 (central differences,
+/// P at the row's first sample in the padded local buffer), summed in x order: the refit's steps
+/// and refit_energy() give the same D for the same φ.
+NF_ROW_KERNEL double refit_energy_row(const float* __restrict P, const std::uint8_t* __restrict m,
+                               const float* __restrict n0, const float* __restrict n1, const float* __restrict n2) {
+    float gnorm[kBlockDim], gdot[kBlockDim];
+    for (int x = 0; x < kBlockDim; ++x) {  // vectorised
+        const float gx = 0.5f * (P[x + 1] - P[x - 1]);
+        const float gy = 0.5f * (P[x + L] - P[x - L]);
+        const float gz = 0.5f * (P[x + L2] - P[x - L2]);
+        gnorm[x] = std::sqrt(gx * gx + gy * gy + gz * gz);
+        gdot[x] = gx * n0[x] + gy * n1[x] + gz * n2[x];
+    }
+    double e = 0.0;
+    for (int x = 0; x < kBlockDim; ++x)
+        if (m[x]) e += double(gnorm[x]) - double(gdot[x]);
+    return e;
 }
 
 /// One Jacobi pass of the unsigned distance on a row of 8 samples: where m is set the sample is
@@ -1116,7 +1131,6 @@ private:
             float* P = s.at(0);
             gather_phi(n, phi_, P);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
-            float gnorm[kBlockDim], gdot[kBlockDim];
             double e = 0.0;
             int nonfinite = 0;
             for (int z = 0; z < kBlockDim; ++z)
@@ -1124,11 +1138,10 @@ private:
                     const std::size_t i0 = base + std::size_t(bidx(0, y, z));
                     const std::uint8_t* m = mask_.data() + i0;
                     if (!any_in_row(m)) continue;  // phi2_ already holds these samples' φ (see refit_loop)
-                    nonfinite |= refit_row(P + lidx(0, y, z), hn_.data() + i0, m, n_[0].data() + i0,
-                                           n_[1].data() + i0, n_[2].data() + i0, dt, phi2_.data() + i0, gnorm, gdot);
+                    nonfinite |= refit_row(P + lidx(0, y, z), hn_.data() + i0, m, dt, phi2_.data() + i0);
                     if (with_energy)
-                        for (int x = 0; x < kBlockDim; ++x)
-                            if (m[x]) e += double(gnorm[x]) - double(gdot[x]);
+                        e += refit_energy_row(P + lidx(0, y, z), m, n_[0].data() + i0, n_[1].data() + i0,
+                                              n_[2].data() + i0);
                 }
             if (nonfinite) bad = true;
             energy[k] = e;
@@ -1144,23 +1157,17 @@ private:
     double refit_energy() {
         std::vector<double> energy(active_.size(), 0.0);
         for_blocks(active_, 1, [&](std::size_t k, std::int32_t b, Scratch& s) {
-            const Neighbourhood& n = nbh_[std::size_t(b)];
             float* P = s.at(0);
-            gather_phi(n, phi_, P);
+            gather_phi(nbh_[std::size_t(b)], phi_, P);
             const std::size_t base = std::size_t(b) * kBlockVoxels;
             double e = 0.0;
             for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y)
-                    for (int x = 0; x < kBlockDim; ++x) {
-                        const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        if (!mask_[i]) continue;
-                        const int q = lidx(x, y, z);
-                        const float gx = 0.5f * (P[q + 1] - P[q - 1]);
-                        const float gy = 0.5f * (P[q + L] - P[q - L]);
-                        const float gz = 0.5f * (P[q + L2] - P[q - L2]);
-                        e += double(std::sqrt(gx * gx + gy * gy + gz * gz)) -
-                             double(gx * n_[0][i] + gy * n_[1][i] + gz * n_[2][i]);
-                    }
+                for (int y = 0; y < kBlockDim; ++y) {
+                    const std::size_t i0 = base + std::size_t(bidx(0, y, z));
+                    if (!any_in_row(mask_.data() + i0)) continue;
+                    e += refit_energy_row(P + lidx(0, y, z), mask_.data() + i0, n_[0].data() + i0, n_[1].data() + i0,
+                                          n_[2].data() + i0);
+                }
             energy[k] = e;
         });
         double sum = 0.0;
