@@ -31,13 +31,14 @@ struct SmoothOptions {
     int iterations = 0;          ///< main iterations (normal loop + refit), >= 0; 0: the mode's
                                  ///< default, default_iterations(mode): 16 for Anisotropic, 8 for the
                                  ///< others. Tuned on shared/data/pairs_gnf and pairs_gcn at resolution
-                                 ///< 256 with 50 normal steps, mean normal error: anisotropic 8 → 16
-                                 ///< iterations fandisk_n0.3 8.25° → 7.70°, block_n0.4 9.66° → 9.08°,
-                                 ///< trimstar_n0.5 13.18° → 11.24°, fandisk_n0.7 16.43° → 13.50°; it
-                                 ///< improves on every pair (the robust µ needs 5–10 iterations to come
-                                 ///< down to µ, and the edge-preserving flow then still has noise to
-                                 ///< remove). Isotropic rounds creases with more: 8 → 16 fandisk_n0.3
-                                 ///< 10.15° → 10.31°, block_n0.4 11.42° → 12.01°.
+                                 ///< 256 with 50 normal steps, mean normal error, anisotropic 8 → 16: CAD
+                                 ///< models gain (fandisk_n0.7 16.43° → 13.50°, trimstar_n0.5 13.18° →
+                                 ///< 11.24°, fandisk_n0.3 8.25° → 7.70°, sharpsphere_n0.3 9.30° → 8.18°:
+                                 ///< the robust µ needs 4–12 iterations to come down to µ, and the
+                                 ///< crease-preserving flow then flattens what noise is left); organic
+                                 ///< ones lose (bunny_n0.2 7.91° → 9.04°, fertility_n3 5.09° → 5.75°: the
+                                 ///< flow erodes their curved detail). Isotropic rounds creases with
+                                 ///< more: 8 → 16 fandisk_n0.3 10.15° → 10.31°, block_n0.4 11.42° → 12.01°.
     int normal_steps = 50;       ///< steps of the normal loop per main iteration, >= 1 (paper: 25; at
                                  ///< resolution 256 the noise of real scans spans several voxels and
                                  ///< needs the longer loop).
