@@ -297,7 +297,8 @@ NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict h
 /// P at the row's first sample in the padded local buffer), summed in x order: the refit's steps
 /// and refit_energy() give the same D for the same φ.
 NF_ROW_KERNEL double refit_energy_row(const float* __restrict P, const std::uint8_t* __restrict m,
-                               const float* __restrict n0, const float* __restrict n1, const float* __restrict n2) {
+                                      const float* __restrict n0, const float* __restrict n1,
+                                      const float* __restrict n2) {
     float gnorm[kBlockDim], gdot[kBlockDim];
     for (int x = 0; x < kBlockDim; ++x) {  // vectorised
         const float gx = 0.5f * (P[x + 1] - P[x - 1]);
