@@ -320,7 +320,9 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--mode", a->mode, "isotropic | anisotropic | highboost | mcf")
         ->check(CLI::IsMember({"isotropic", "anisotropic", "highboost", "mcf"}));
     cmd->add_option("--iterations", a->iterations,
-                    "main iterations (normal loop + refit); default: 16 for anisotropic, 8 for the other modes")
+                    "main iterations (normal loop + refit); default: " +
+                        std::to_string(default_iterations(SmoothMode::Anisotropic)) + " for anisotropic, " +
+                        std::to_string(default_iterations(SmoothMode::Isotropic)) + " for the other modes")
         ->check(CLI::Range(1, 10000));
     cmd->add_option("--normal-steps", a->normal_steps, "normal-loop steps per main iteration")->check(CLI::Range(1, 10000));
     cmd->add_option("--mu", a->mu, "anisotropic conductance scale, 1/voxel")->check(CLI::PositiveNumber);
