@@ -113,8 +113,9 @@ struct SmoothReport {
 /// Sethian 1988) until D = Σ(|∇φ| − ∇φ·N) stops decreasing; (4) moves the narrow band with the
 /// surface (allocating and freeing 8³ blocks) and reinitialises φ to a signed distance (interface
 /// samples by φ/|∇φ| bounded by the axis crossings, the rest by block-Jacobi passes of the Godunov
-/// eikonal update, Jacobi passes inside each block until it settles; between main iterations exact only as far as an iteration reads φ, active_band
-/// + 3 voxels, on return out to the half width). MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3).
+/// eikonal update, Jacobi passes inside each block until it settles; between main iterations exact
+/// only as far as an iteration reads φ, active_band + 3 voxels, on return out to the half width).
+/// MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3).
 /// Anisotropic mode regularises the conductance (see SmoothOptions::conductance_presmooth_steps).
 ///
 /// \param v        volume, modified in place: world-unit φ, negative inside. On return its band is
