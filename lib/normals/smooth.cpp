@@ -638,9 +638,9 @@ private:
         // The per-sample work arrays: every stage writes what it reads after the blocks moved, so
         // their contents need not survive (their slots changed anyway). A growing array is
         // reallocated with headroom rather than copied: as the band moves it grows by a few blocks
-        // at a time, and resizing eleven arrays of the whole band (copy, zero fill, page faults)
-        // took 0.2–0.3 s per call on bunny at resolution 256, serial. Untouched headroom costs
-        // address space, not memory.
+        // at a time, and resizing these twelve arrays of the whole band (copy, zero fill, page
+        // faults) took 0.2–0.3 s per call on bunny at resolution 256, serial. Untouched headroom
+        // costs address space, not memory.
         const std::size_t n = phi_.size();
         auto fit = [n](auto& v) {
             if (v.capacity() < n) {
