@@ -142,57 +142,82 @@ inline float exp_nonpositive(float x) {
 /// normal loop, or the paper's g = exp(−κ²/(2µ²)) of the current normals.
 enum class FaceWeight { One, Frozen, Live };
 
-/// face_terms over one row of faces q0 … q0+n−1 (contiguous in x), branch-free so that the
-/// compiler vectorises it: the same operations in the same order as face_terms, so the results are
+/// face_terms over `rows` rows of faces q0 + r·L … q0 + r·L + n−1 (each contiguous in x; rows of 8,
+/// or one run across a plane for the x faces), branch-free so that the compiler vectorises it. Rows
+/// are passed several at a time because one row of 8 is one vector iteration whose dependency
+/// chain (the division, the exp) would otherwise stall on its own: the same operations in the
+/// same order as face_terms, so the results are the same operations in the same order as face_terms, so the results are
 /// bit-identical. F = g·m, or 0 where both samples of the face lie outside the band (the faces the
 /// engine skips); g = 1, G[q] or exp(−κ²·inv2mu2) by kWeight. E = the face's energy density: κ²,
 /// G[q]·κ² or (1 − g)·2µ² (the penalty G(κ²) of Eq. 20, as a product where penalty() divides: the
 /// reported G may differ in the last bit, the normals do not).
-template <FaceWeight kWeight>
+/// N holds the three components L3 apart, F likewise (the kernels' scratch layout), and the axis
+/// is a template argument: every load and store is then a fixed offset from one of five pointers,
+/// which leaves the registers to the arithmetic (with run-time strides and a pointer per component,
+/// a third of the loop's instructions were address arithmetic and stack reloads).
+template <FaceWeight kWeight, int kAxis>
 NF_ROW_KERNEL
-void face_row(const float* __restrict P, const float* __restrict N0, const float* __restrict N1,
-              const float* __restrict N2, const float* __restrict G, int q0, int n, int sa, int sb, int sc,
-              float band, float inv2mu2, float* __restrict F0, float* __restrict F1, float* __restrict F2,
-              float* __restrict E) {
+void face_row(const float* __restrict P, const float* __restrict N, const float* __restrict G, int q0, int n, int rows,
+              float band, float inv2mu2, float* __restrict F, float* __restrict E) {
+    constexpr int sa = kStride[kAxis], sb = kStride[(kAxis + 1) % 3], sc = kStride[(kAxis + 2) % 3];
+    const float* N0 = N;
+    const float* N1 = N + L3;
+    const float* N2 = N + 2 * L3;
+    float* F0 = F;
+    float* F1 = F + L3;
+    float* F2 = F + 2 * L3;
     const float two_mu2 = 1.0f / inv2mu2;  // E of Live as a product: a division per face costs more
-    for (int j = 0; j < n; ++j) {
-        const int q = q0 + j;
-        const int q1 = q + sa;
-        const float dphi = P[q1] - P[q];
-        const float gb = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q1 + sb] - P[q1 - sb]));
-        const float gc = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q1 + sc] - P[q1 - sc]));
-        const float g2 = dphi * dphi + gb * gb + gc * gc;
-        const float inv = 1.0f / std::max(g2, 1e-12f);
-        const float a0 = N0[q1] - N0[q];
-        const float b0 = 0.25f * ((N0[q + sb] - N0[q - sb]) + (N0[q1 + sb] - N0[q1 - sb]));
-        const float d0 = 0.25f * ((N0[q + sc] - N0[q - sc]) + (N0[q1 + sc] - N0[q1 - sc]));
-        const float C0 = (a0 * dphi + b0 * gb + d0 * gc) * inv;
-        const float a1 = N1[q1] - N1[q];
-        const float b1 = 0.25f * ((N1[q + sb] - N1[q - sb]) + (N1[q1 + sb] - N1[q1 - sb]));
-        const float d1 = 0.25f * ((N1[q + sc] - N1[q - sc]) + (N1[q1 + sc] - N1[q1 - sc]));
-        const float C1 = (a1 * dphi + b1 * gb + d1 * gc) * inv;
-        const float a2 = N2[q1] - N2[q];
-        const float b2 = 0.25f * ((N2[q + sb] - N2[q - sb]) + (N2[q1 + sb] - N2[q1 - sb]));
-        const float d2 = 0.25f * ((N2[q + sc] - N2[q - sc]) + (N2[q1 + sc] - N2[q1 - sc]));
-        const float C2 = (a2 * dphi + b2 * gb + d2 * gc) * inv;
-        const float dn2 = ((a0 * a0 + b0 * b0 + d0 * d0) + (a1 * a1 + b1 * b1 + d1 * d1)) + (a2 * a2 + b2 * b2 + d2 * d2);
-        const float c2 = (C0 * C0 + C1 * C1) + C2 * C2;
-        const float k2 = std::max(dn2 - c2 * g2, 0.0f);
-        // a mask, not a branch (no short-circuit): the loop stays vectorisable
-        const float keep = float(!(int(std::abs(P[q]) > band) & int(std::abs(P[q1]) > band)));
-        float g = keep, e = k2;
-        if constexpr (kWeight == FaceWeight::Frozen) {
-            g = G[q] * keep;
-            e = G[q] * k2;
-        } else if constexpr (kWeight == FaceWeight::Live) {
-            const float c = exp_nonpositive(-k2 * inv2mu2);
-            g = c * keep;
-            e = (1.0f - c) * two_mu2;
+    for (int r = 0; r < rows; ++r) {
+        for (int j = 0; j < n; ++j) {
+            const int q = q0 + r * L + j;
+            const int q1 = q + sa;
+            const float dphi = P[q1] - P[q];
+            const float gb = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q1 + sb] - P[q1 - sb]));
+            const float gc = 0.25f * ((P[q + sc] - P[q - sc]) + (P[q1 + sc] - P[q1 - sc]));
+            const float g2 = dphi * dphi + gb * gb + gc * gc;
+            const float inv = 1.0f / std::max(g2, 1e-12f);
+            const float a0 = N0[q1] - N0[q];
+            const float b0 = 0.25f * ((N0[q + sb] - N0[q - sb]) + (N0[q1 + sb] - N0[q1 - sb]));
+            const float d0 = 0.25f * ((N0[q + sc] - N0[q - sc]) + (N0[q1 + sc] - N0[q1 - sc]));
+            const float C0 = (a0 * dphi + b0 * gb + d0 * gc) * inv;
+            const float a1 = N1[q1] - N1[q];
+            const float b1 = 0.25f * ((N1[q + sb] - N1[q - sb]) + (N1[q1 + sb] - N1[q1 - sb]));
+            const float d1 = 0.25f * ((N1[q + sc] - N1[q - sc]) + (N1[q1 + sc] - N1[q1 - sc]));
+            const float C1 = (a1 * dphi + b1 * gb + d1 * gc) * inv;
+            const float a2 = N2[q1] - N2[q];
+            const float b2 = 0.25f * ((N2[q + sb] - N2[q - sb]) + (N2[q1 + sb] - N2[q1 - sb]));
+            const float d2 = 0.25f * ((N2[q + sc] - N2[q - sc]) + (N2[q1 + sc] - N2[q1 - sc]));
+            const float C2 = (a2 * dphi + b2 * gb + d2 * gc) * inv;
+            const float dn2 = ((a0 * a0 + b0 * b0 + d0 * d0) + (a1 * a1 + b1 * b1 + d1 * d1)) + (a2 * a2 + b2 * b2 + d2 * d2);
+            const float c2 = (C0 * C0 + C1 * C1) + C2 * C2;
+            const float k2 = std::max(dn2 - c2 * g2, 0.0f);
+            // a mask, not a branch (no short-circuit): the loop stays vectorisable
+            const float keep = float(!(int(std::abs(P[q]) > band) & int(std::abs(P[q1]) > band)));
+            float g = keep, e = k2;
+            if constexpr (kWeight == FaceWeight::Frozen) {
+                g = G[q] * keep;
+                e = G[q] * k2;
+            } else if constexpr (kWeight == FaceWeight::Live) {
+                const float c = exp_nonpositive(-k2 * inv2mu2);
+                g = c * keep;
+                e = (1.0f - c) * two_mu2;
+            }
+            F0[q] = g * (a0 - dphi * C0);
+            F1[q] = g * (a1 - dphi * C1);
+            F2[q] = g * (a2 - dphi * C2);
+            E[q] = e;
         }
-        F0[q] = g * (a0 - dphi * C0);
-        F1[q] = g * (a1 - dphi * C1);
-        F2[q] = g * (a2 - dphi * C2);
-        E[q] = e;
+    }
+}
+
+/// face_row for the faces x+½e_axis.
+template <FaceWeight kWeight>
+void face_rows(int axis, const float* P, const float* N, const float* G, int q0, int n, int rows, float band,
+               float inv2mu2, float* F, float* E) {
+    switch (axis) {
+        case 0: face_row<kWeight, 0>(P, N, G, q0, n, rows, band, inv2mu2, F, E); break;
+        case 1: face_row<kWeight, 1>(P, N, G, q0, n, rows, band, inv2mu2, F, E); break;
+        default: face_row<kWeight, 2>(P, N, G, q0, n, rows, band, inv2mu2, F, E); break;
     }
 }
 
@@ -209,42 +234,59 @@ inline bool any_in_row(const std::uint8_t* m) {
     return w != 0;
 }
 
-/// Σ m[x]·E[x] over a row of 8, summed in a fixed tree (the same on every thread and vector width).
-inline float masked_row_sum(const float* __restrict E, const std::uint8_t* __restrict m) {
-    float t[kBlockDim];
-    for (int x = 0; x < kBlockDim; ++x) t[x] = m[x] ? E[x] : 0.0f;
-    return ((t[0] + t[1]) + (t[2] + t[3])) + ((t[4] + t[5]) + (t[6] + t[7]));
+/// Σ m·E over the 8³ samples of a block (E in the padded layout, m in the block's): eight lanes,
+/// each summing its column over the rows in order, then a fixed tree; so the same on every thread
+/// and vector width. A mask, not a product: E holds stale values where m is 0. Written with vector
+/// types because GCC 12 leaves the eight column sums scalar, with a branch per sample.
+NF_ROW_KERNEL double masked_block_sum(const float* __restrict E, const std::uint8_t* __restrict m) {
+    using v8f = float __attribute__((vector_size(32)));
+    using v8i = std::int32_t __attribute__((vector_size(32)));
+    v8f acc = {};
+    for (int z = 0; z < kBlockDim; ++z)
+        for (int y = 0; y < kBlockDim; ++y) {
+            v8f e;
+            std::memcpy(&e, E + lidx(0, y, z), sizeof e);
+            const std::uint8_t* r = m + bidx(0, y, z);
+            const v8i mi = {r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7]};
+            const v8i keep = mi != 0;  // lanes of all ones or zeros
+            acc += reinterpret_cast<v8f>(reinterpret_cast<v8i>(e) & keep);
+        }
+    return double(((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7])));
 }
 
-/// The update of one row of 8 samples of the normal loop: N ← normalize(N + dt (I − NNᵀ) ∇·F) where
-/// m (the active samples), N elsewhere. f<a><c>: flux component c through the faces x+½e_a of the
-/// row (the face below a sample is at −1, −L, −L² from it); n<c>: the normals. Branch-free (selects)
-/// and with restrict parameters so that it vectorises. Returns 1 if an active result is not finite.
+/// The update of `rows` consecutive rows of 8 samples of the normal loop (stride L in the padded
+/// buffers, kBlockDim in m and d): N ← normalize(N + dt (I − NNᵀ) ∇·F) where m (the active samples),
+/// N elsewhere. f<a><c>: flux component c through the faces x+½e_a of the row (the face below a
+/// sample is at −1, −L, −L² from it); n<c>: the normals. Branch-free (selects) and with restrict
+/// parameters so that it vectorises. Returns 1 if an active result is not finite.
 NF_ROW_KERNEL int update_row(const float* __restrict fx0, const float* __restrict fx1, const float* __restrict fx2,
                const float* __restrict fy0, const float* __restrict fy1, const float* __restrict fy2,
                const float* __restrict fz0, const float* __restrict fz1, const float* __restrict fz2,
                const float* __restrict n0, const float* __restrict n1, const float* __restrict n2,
-               const std::uint8_t* __restrict m, float dt, float* __restrict d0, float* __restrict d1,
+               const std::uint8_t* __restrict m, float dt, int rows, float* __restrict d0, float* __restrict d1,
                float* __restrict d2) {
-    std::int32_t mi[kBlockDim];
-    widen_mask(m, mi);
     int nonfinite = 0;
-    for (int x = 0; x < kBlockDim; ++x) {
-        const float v0 = (fx0[x] - fx0[x - 1]) + (fy0[x] - fy0[x - L]) + (fz0[x] - fz0[x - L2]);
-        const float v1 = (fx1[x] - fx1[x - 1]) + (fy1[x] - fy1[x - L]) + (fz1[x] - fz1[x - L2]);
-        const float v2 = (fx2[x] - fx2[x - 1]) + (fy2[x] - fy2[x - L]) + (fz2[x] - fz2[x - L2]);
-        const float nx = n0[x], ny = n1[x], nz = n2[x];
-        const float pn = v0 * nx + v1 * ny + v2 * nz;
-        const float ux = nx + dt * (v0 - pn * nx);
-        const float uy = ny + dt * (v1 - pn * ny);
-        const float uz = nz + dt * (v2 - pn * nz);
-        const float len = std::sqrt(ux * ux + uy * uy + uz * uz);
-        const bool act = mi[x] != 0;
-        nonfinite |= int(act & !(len <= std::numeric_limits<float>::max()));
-        const float div = len > 1e-6f ? len : 1.0f;
-        d0[x] = act ? ux / div : nx;
-        d1[x] = act ? uy / div : ny;
-        d2[x] = act ? uz / div : nz;
+    for (int r = 0; r < rows; ++r, fx0 += L, fx1 += L, fx2 += L, fy0 += L, fy1 += L, fy2 += L, fz0 += L, fz1 += L,
+             fz2 += L, n0 += L, n1 += L, n2 += L, m += kBlockDim, d0 += kBlockDim, d1 += kBlockDim, d2 += kBlockDim) {
+        std::int32_t mi[kBlockDim];
+        widen_mask(m, mi);
+        for (int x = 0; x < kBlockDim; ++x) {
+            const float v0 = (fx0[x] - fx0[x - 1]) + (fy0[x] - fy0[x - L]) + (fz0[x] - fz0[x - L2]);
+            const float v1 = (fx1[x] - fx1[x - 1]) + (fy1[x] - fy1[x - L]) + (fz1[x] - fz1[x - L2]);
+            const float v2 = (fx2[x] - fx2[x - 1]) + (fy2[x] - fy2[x - L]) + (fz2[x] - fz2[x - L2]);
+            const float nx = n0[x], ny = n1[x], nz = n2[x];
+            const float pn = v0 * nx + v1 * ny + v2 * nz;
+            const float ux = nx + dt * (v0 - pn * nx);
+            const float uy = ny + dt * (v1 - pn * ny);
+            const float uz = nz + dt * (v2 - pn * nz);
+            const float len = std::sqrt(ux * ux + uy * uy + uz * uz);
+            const bool act = mi[x] != 0;
+            nonfinite |= int(act & !(len <= std::numeric_limits<float>::max()));
+            const float div = len > 1e-6f ? len : 1.0f;
+            d0[x] = act ? ux / div : nx;
+            d1[x] = act ? uy / div : ny;
+            d2[x] = act ? uz / div : nz;
+        }
     }
     return nonfinite;
 }
@@ -906,22 +948,19 @@ private:
             const std::uint8_t* rows = row_band_.data() + k * kRowFlags;
             double e = 0.0;
             for (int a = 0; a < 3; ++a) {
-                const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
                 int lo[3] = {0, 0, 0};
                 lo[a] = -1;
-                auto faces = [&](int q0, int count) {
+                auto faces = [&](int q0, int count, int rows) {
                     switch (cond) {
                         case FaceWeight::One:
-                            face_row<FaceWeight::One>(P, N[0], N[1], N[2], nullptr, q0, count, sa, sb, sc, band,
-                                                      inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                            face_rows<FaceWeight::One>(a, P, N[0], nullptr, q0, count, rows, band, inv2mu2, F[a][0], E);
                             break;
                         case FaceWeight::Frozen:
-                            face_row<FaceWeight::Frozen>(P, N[0], N[1], N[2], pad_g_[a].data() + k * L3, q0, count,
-                                                         sa, sb, sc, band, inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                            face_rows<FaceWeight::Frozen>(a, P, N[0], pad_g_[a].data() + k * L3, q0, count, rows, band,
+                                                          inv2mu2, F[a][0], E);
                             break;
                         case FaceWeight::Live:
-                            face_row<FaceWeight::Live>(P, N[0], N[1], N[2], nullptr, q0, count, sa, sb, sc, band,
-                                                       inv2mu2, F[a][0], F[a][1], F[a][2], E);
+                            face_rows<FaceWeight::Live>(a, P, N[0], nullptr, q0, count, rows, band, inv2mu2, F[a][0], E);
                             break;
                     }
                 };
@@ -941,33 +980,50 @@ private:
                             }
                         if (y1 < 0) continue;
                         const int count = ((y1 - y0) * L + (kBlockDim + 1) + (kBlockDim - 1)) / kBlockDim * kBlockDim;
-                        faces(lidx(-1, y0, z), count);
+                        faces(lidx(-1, y0, z), count, 1);
                     }
                 } else {
-                    for (int z = lo[2]; z < kBlockDim; ++z)
+                    // y and z faces, 8 per row: the flagged rows of a z plane in one call, row by
+                    // row (unflagged rows inside the span are computed and never read), so that
+                    // the rows' long dependency chains (division, exp) overlap.
+                    for (int z = lo[2]; z < kBlockDim; ++z) {
+                        int y0 = kBlockDim, y1 = lo[1] - 1;
                         for (int y = lo[1]; y < kBlockDim; ++y)
-                            if (rows[row_flag(a, y, z)]) faces(lidx(0, y, z), kBlockDim);
+                            if (rows[row_flag(a, y, z)]) {
+                                y0 = std::min(y0, y);
+                                y1 = y;
+                            }
+                        if (y1 >= y0) faces(lidx(0, y0, z), kBlockDim, y1 - y0 + 1);
+                    }
                 }
                 // energy of the faces owned by the active samples of this block (in band: computed)
-                for (int z = 0; z < kBlockDim; ++z)
-                    for (int y = 0; y < kBlockDim; ++y) e += masked_row_sum(E + lidx(0, y, z), M + bidx(0, y, z));
+                e += masked_block_sum(E, M);
             }
             energy[k] = e;
             if (!update) return;
             // N ← normalize(N + dt (I − NNᵀ) ∇·F) at the active samples; the rest keep N. Rows of
             // 8, branch-free (selects), so that the loop vectorises.
             int nonfinite = 0;
-            for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y) {
-                    const int q0 = lidx(0, y, z);
-                    const std::size_t i0 = base + std::size_t(bidx(0, y, z));
-                    const std::uint8_t* m = mask_.data() + i0;
-                    if (!any_in_row(m)) continue;  // dst already holds these samples' N (see normal_loop)
-                    nonfinite |= update_row(F[0][0] + q0, F[0][1] + q0, F[0][2] + q0, F[1][0] + q0, F[1][1] + q0,
-                                            F[1][2] + q0, F[2][0] + q0, F[2][1] + q0, F[2][2] + q0, N[0] + q0,
-                                            N[1] + q0, N[2] + q0, m, dt, dst[0].data() + i0, dst[1].data() + i0,
-                                            dst[2].data() + i0);
-                }
+            auto update_rows = [&](int y, int z, int count) {
+                const int q0 = lidx(0, y, z);
+                const std::size_t i0 = base + std::size_t(bidx(0, y, z));
+                nonfinite |= update_row(F[0][0] + q0, F[0][1] + q0, F[0][2] + q0, F[1][0] + q0, F[1][1] + q0,
+                                        F[1][2] + q0, F[2][0] + q0, F[2][1] + q0, F[2][2] + q0, N[0] + q0, N[1] + q0,
+                                        N[2] + q0, mask_.data() + i0, dt, count, dst[0].data() + i0,
+                                        dst[1].data() + i0, dst[2].data() + i0);
+            };
+            // Row by row over the span of a z plane's rows with active samples, in one call (see
+            // face_row). A row inside the span without any gets dst = N, which dst already holds
+            // there (see normal_loop).
+            for (int z = 0; z < kBlockDim; ++z) {
+                int y0 = kBlockDim, y1 = -1;
+                for (int y = 0; y < kBlockDim; ++y)
+                    if (any_in_row(M + bidx(0, y, z))) {
+                        y0 = std::min(y0, y);
+                        y1 = y;
+                    }
+                if (y1 >= y0) update_rows(y0, z, y1 - y0 + 1);
+            }
             if (nonfinite) bad = true;
         });
         if (bad) fail("normal in the normal loop");
@@ -1038,15 +1094,13 @@ private:
             gather_n(nbh_[std::size_t(b)], src, N[0], N[1], N[2]);
             for (int a = 0; a < 3; ++a) {
                 float* G = pad_g_[a].data() + k * L3;
-                const int sa = kStride[a], sb = kStride[(a + 1) % 3], sc = kStride[(a + 2) % 3];
                 int lo[3] = {0, 0, 0};
                 lo[a] = -1;
                 const int nx = kBlockDim - lo[0];
                 for (int z = lo[2]; z < kBlockDim; ++z)
                     for (int y = lo[1]; y < kBlockDim; ++y) {
                         const int q0 = lidx(lo[0], y, z);
-                        face_row<FaceWeight::One>(P, N[0], N[1], N[2], nullptr, q0, nx, sa, sb, sc, band, inv2mu2,
-                                                  F, s.at(4), s.at(5), K);
+                        face_rows<FaceWeight::One>(a, P, N[0], nullptr, q0, nx, 1, band, inv2mu2, F, K);
                         for (int j = 0; j < nx; ++j) G[q0 + j] = std::exp(-K[q0 + j] * inv2mu2);
                     }
             }
