@@ -9,8 +9,9 @@
 // median over several runs resolve differences of a few per cent. Each library is dlopen'ed with
 // RTLD_LOCAL (copy the old build's library aside first, e.g. cp B/lib/libnormalflow_core.so /tmp/old.so)
 // and its smooth_volume is called on a copy of one scan-converted volume. Prints the minimum and the
-// median of the normal loop's and the main iteration's wall seconds, B / A, and whether the two
-// builds returned the same φ bit for bit (else the largest difference, in voxels).
+// median of the wall seconds of the normal loop, the refit, the band moves and reinitialisations and
+// the main iteration, B / A, and whether the two builds returned the same φ bit for bit (else the
+// largest difference, in voxels).
 // Needs the engine built as a shared library (the default build here).
 #include <dlfcn.h>
 
@@ -107,7 +108,7 @@ int main(int argc, char** argv) {
         } else if (mode == "isotropic") {
             o.mode = SmoothMode::Isotropic;
         }
-        std::vector<double> normals[2], per_iteration[2];
+        std::vector<double> normals[2], refit[2], reinit[2], per_iteration[2];
         Volume result[2];
         for (int r = 0; r < runs; ++r)
             for (int e = 0; e < 2; ++e) {
@@ -117,18 +118,27 @@ int main(int argc, char** argv) {
                 double total = 0;
                 for (const double s : rep.seconds_per_iteration) total += s;
                 normals[w].push_back(rep.seconds_normals / iterations);
+                refit[w].push_back(rep.seconds_refit / iterations);
+                reinit[w].push_back(rep.seconds_reinit / iterations);
                 per_iteration[w].push_back(total / iterations);
                 if (r == 0) result[w] = std::move(v);
             }
         std::printf("%s, resolution %d, %s, %d thread(s), %d run(s) each, interleaved\n\n", mesh_path.c_str(), resolution,
                     mode.c_str(), threads, runs);
-        std::printf("| build | normal loop s, min | median | main iteration s, min | median |\n|---|---|---|---|---|\n");
-        for (int e = 0; e < 2; ++e)
-            std::printf("| %s %s | %.3f | %.3f | %.3f | %.3f |\n", e ? "B" : "A", libs[e], minimum(normals[e]),
-                        median(normals[e]), minimum(per_iteration[e]), median(per_iteration[e]));
-        std::printf("| B / A | %.3f | %.3f | %.3f | %.3f |\n\n", minimum(normals[1]) / minimum(normals[0]),
-                    median(normals[1]) / median(normals[0]), minimum(per_iteration[1]) / minimum(per_iteration[0]),
-                    median(per_iteration[1]) / median(per_iteration[0]));
+        std::printf("Wall seconds per main iteration, min / median; the band moves and reinitialisations include the "
+                    "one before the first iteration.\n\n");
+        std::printf("| build | normal loop | refit | band move + reinitialisation | main iteration |\n|---|---|---|---|---|\n");
+        const std::vector<double>* cols[4] = {normals, refit, reinit, per_iteration};
+        for (int e = 0; e < 2; ++e) {
+            std::printf("| %s %s", e ? "B" : "A", libs[e]);
+            for (const auto* c : cols) std::printf(" | %.3f / %.3f", minimum(c[e]), median(c[e]));
+            std::printf(" |\n");
+        }
+        std::printf("| B / A");
+        for (const auto* c : cols)
+            std::printf(" | %.3f / %.3f", minimum(c[1]) / std::max(minimum(c[0]), 1e-9),
+                        median(c[1]) / std::max(median(c[0]), 1e-9));
+        std::printf(" |\n\n");
         const auto& va = result[0].values;
         const auto& vb = result[1].values;
         if (va.size() != vb.size() || result[0].block_coords != result[1].block_coords) {

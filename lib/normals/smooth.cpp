@@ -311,26 +311,29 @@ inline void refit_axis(const float* __restrict P, int x, float& H, float& gp2, f
     gm2 += dmn * dmn + dpp * dpp;
 }
 
-/// One refit step on a row of 8 samples: out = φ + dt |∇φ|_upwind (H_φ − hn) where m (the active
-/// samples), φ elsewhere. P points at the row's first sample in the padded local buffer.
+/// One refit step on `rows` consecutive rows of 8 samples (one call per plane: see face_row):
+/// out = φ + dt |∇φ|_upwind (H_φ − hn) where m (the active samples), φ elsewhere. P points at the
+/// first row's first sample in the padded local buffer (rows L apart; hn, m, out kBlockDim apart).
 /// Branch-free, so that it vectorises.
 /// Returns 1 if an active result is not finite.
 NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m,
-                            float dt, float* __restrict out) {
-    std::int32_t mi[kBlockDim];
-    widen_mask(m, mi);
+                            float dt, int rows, float* __restrict out) {
     int nonfinite = 0;
-    for (int x = 0; x < kBlockDim; ++x) {
-        float H = 0.0f, gp2 = 0.0f, gm2 = 0.0f;
-        refit_axis<kStride[0], kStride[1], kStride[2]>(P, x, H, gp2, gm2);
-        refit_axis<kStride[1], kStride[2], kStride[0]>(P, x, H, gp2, gm2);
-        refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2);
-        const float rhs = H - hn[x];  // φ_t = |∇φ| rhs, speed F = −rhs
-        const float grad = std::sqrt(rhs < 0.0f ? gp2 : gm2);
-        const float v = P[x] + dt * grad * rhs;
-        const bool act = mi[x] != 0;
-        nonfinite |= int(act & !(std::abs(v) <= std::numeric_limits<float>::max()));
-        out[x] = act ? v : P[x];
+    for (int r = 0; r < rows; ++r, P += L, hn += kBlockDim, m += kBlockDim, out += kBlockDim) {
+        std::int32_t mi[kBlockDim];
+        widen_mask(m, mi);
+        for (int x = 0; x < kBlockDim; ++x) {
+            float H = 0.0f, gp2 = 0.0f, gm2 = 0.0f;
+            refit_axis<kStride[0], kStride[1], kStride[2]>(P, x, H, gp2, gm2);
+            refit_axis<kStride[1], kStride[2], kStride[0]>(P, x, H, gp2, gm2);
+            refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2);
+            const float rhs = H - hn[x];  // φ_t = |∇φ| rhs, speed F = −rhs
+            const float grad = std::sqrt(rhs < 0.0f ? gp2 : gm2);
+            const float v = P[x] + dt * grad * rhs;
+            const bool act = mi[x] != 0;
+            nonfinite |= int(act & !(std::abs(v) <= std::numeric_limits<float>::max()));
+            out[x] = act ? v : P[x];
+        }
     }
     return nonfinite;
 }
@@ -355,42 +358,49 @@ NF_ROW_KERNEL double refit_energy_row(const float* __restrict P, const std::uint
     return e;
 }
 
-/// One Jacobi pass of the unsigned distance on a row of 8 samples: where m is set the sample is
-/// fixed (out = U), elsewhere out = min(U, the Godunov upwind solution of |∇u| = 1 from the smaller
-/// neighbour per axis, h = 1). U points at the row's first sample in the padded local buffer.
+/// One Jacobi pass of the unsigned distance over the 8³ samples of a block, row by row in one call
+/// (a row is one vector iteration whose sorting network and roots would otherwise stall alone; see
+/// face_row): where m is set the sample is fixed (out = U), elsewhere out = min(U, the Godunov
+/// upwind solution of |∇u| = 1 from the smaller neighbour per axis, h = 1). U and out: the padded
+/// local buffers, m in the block's layout.
 /// Branch-free (a sorting network and selects) so that it vectorises; the same values as solving
 /// with the sorted neighbours a0 <= a1 <= a2 in turn: a0 + 1, then the 2-D, then the 3-D root.
 /// Returns 1 when a free sample decreased by more than kReinitTolerance to below limit (a value
 /// depends only on smaller ones, so the samples below limit converge whatever happens above it).
-NF_ROW_KERNEL int eikonal_row(const float* __restrict U, const std::uint8_t* __restrict m, float limit,
-                              float* __restrict out) {
-    std::int32_t mi[kBlockDim];
-    widen_mask(m, mi);
+NF_ROW_KERNEL int eikonal_block(const float* __restrict U0, const std::uint8_t* __restrict m0, float limit,
+                                float* __restrict out0) {
     int changed = 0;
-    for (int x = 0; x < kBlockDim; ++x) {
-        const float c = U[x];
-        float a0 = std::min(U[x - 1], U[x + 1]);
-        float a1 = std::min(U[x - L], U[x + L]);
-        float a2 = std::min(U[x - L2], U[x + L2]);
-        const float s01 = std::min(a0, a1), l01 = std::max(a0, a1);
-        a0 = s01;
-        a1 = std::min(l01, a2);
-        a2 = std::max(l01, a2);
-        const float s0 = std::min(a0, a1);
-        a1 = std::max(a0, a1);
-        a0 = s0;
-        const float d1 = a0 + 1.0f;
-        const float s2 = a0 + a1;
-        const float dd = a0 - a1;
-        const float d2 = 0.5f * (s2 + std::sqrt(std::max(2.0f - dd * dd, 0.0f)));
-        const float s3 = a0 + a1 + a2;
-        const float q2 = a0 * a0 + a1 * a1 + a2 * a2;
-        const float d3 = (s3 + std::sqrt(std::max(s3 * s3 - 3.0f * (q2 - 1.0f), 0.0f))) / 3.0f;
-        const float d = d1 > a1 ? (d2 > a2 ? d3 : d2) : d1;
-        const float nu = std::min(c, d);
-        const bool fixed = mi[x] != 0;
-        changed |= int(!fixed & (c - nu > kReinitTolerance) & (nu < limit));
-        out[x] = fixed ? c : nu;
+    for (int r = 0; r < kBlockDim * kBlockDim; ++r) {
+        const int q0 = lidx(0, r % kBlockDim, r / kBlockDim);
+        const float* U = U0 + q0;
+        float* out = out0 + q0;
+        std::int32_t mi[kBlockDim];
+        widen_mask(m0 + r * kBlockDim, mi);
+        for (int x = 0; x < kBlockDim; ++x) {
+            const float c = U[x];
+            float a0 = std::min(U[x - 1], U[x + 1]);
+            float a1 = std::min(U[x - L], U[x + L]);
+            float a2 = std::min(U[x - L2], U[x + L2]);
+            const float s01 = std::min(a0, a1), l01 = std::max(a0, a1);
+            a0 = s01;
+            a1 = std::min(l01, a2);
+            a2 = std::max(l01, a2);
+            const float s0 = std::min(a0, a1);
+            a1 = std::max(a0, a1);
+            a0 = s0;
+            const float d1 = a0 + 1.0f;
+            const float s2 = a0 + a1;
+            const float dd = a0 - a1;
+            const float d2 = 0.5f * (s2 + std::sqrt(std::max(2.0f - dd * dd, 0.0f)));
+            const float s3 = a0 + a1 + a2;
+            const float q2 = a0 * a0 + a1 * a1 + a2 * a2;
+            const float d3 = (s3 + std::sqrt(std::max(s3 * s3 - 3.0f * (q2 - 1.0f), 0.0f))) / 3.0f;
+            const float d = d1 > a1 ? (d2 > a2 ? d3 : d2) : d1;
+            const float nu = std::min(c, d);
+            const bool fixed = mi[x] != 0;
+            changed |= int(!fixed & (c - nu > kReinitTolerance) & (nu < limit));
+            out[x] = fixed ? c : nu;
+        }
     }
     return changed;
 }
@@ -808,12 +818,7 @@ private:
                 const std::uint8_t* M = mask_.data() + base;
                 int ch = 1, local = 0;
                 for (; ch && local < kLocalPasses; ++local) {
-                    ch = 0;
-                    for (int z = 0; z < kBlockDim; ++z)
-                        for (int y = 0; y < kBlockDim; ++y) {
-                            const int q0 = lidx(0, y, z);
-                            ch |= eikonal_row(U + q0, M + bidx(0, y, z), limit, V + q0);
-                        }
+                    ch = eikonal_block(U, M, limit, V);
                     std::swap(U, V);
                 }
                 // which outer layers changed since the last pass (u holds the block's last values)
@@ -1251,16 +1256,27 @@ private:
             const std::size_t base = std::size_t(b) * kBlockVoxels;
             double e = 0.0;
             int nonfinite = 0;
-            for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y) {
-                    const std::size_t i0 = base + std::size_t(bidx(0, y, z));
-                    const std::uint8_t* m = mask_.data() + i0;
-                    if (!any_in_row(m)) continue;  // phi2_ already holds these samples' φ (see refit_loop)
-                    nonfinite |= refit_row(P + lidx(0, y, z), hn_.data() + i0, m, dt, phi2_.data() + i0);
-                    if (with_energy)
-                        e += refit_energy_row(P + lidx(0, y, z), m, n_[0].data() + i0, n_[1].data() + i0,
-                                              n_[2].data() + i0);
-                }
+            // The span of rows with active samples of each z plane in one call; a row in between
+            // without any gets φ, which phi2_ already holds there (see refit_loop).
+            for (int z = 0; z < kBlockDim; ++z) {
+                int y0 = kBlockDim, y1 = -1;
+                for (int y = 0; y < kBlockDim; ++y)
+                    if (any_in_row(mask_.data() + base + std::size_t(bidx(0, y, z)))) {
+                        y0 = std::min(y0, y);
+                        y1 = y;
+                    }
+                if (y1 < y0) continue;
+                const std::size_t i0 = base + std::size_t(bidx(0, y0, z));
+                nonfinite |= refit_row(P + lidx(0, y0, z), hn_.data() + i0, mask_.data() + i0, dt, y1 - y0 + 1,
+                                       phi2_.data() + i0);
+                if (with_energy)
+                    for (int y = y0; y <= y1; ++y) {
+                        const std::size_t i = base + std::size_t(bidx(0, y, z));
+                        if (any_in_row(mask_.data() + i))
+                            e += refit_energy_row(P + lidx(0, y, z), mask_.data() + i, n_[0].data() + i,
+                                                  n_[1].data() + i, n_[2].data() + i);
+                    }
+            }
             if (nonfinite) bad = true;
             energy[k] = e;
         });
