@@ -136,7 +136,7 @@ struct SmoothReport {
 ///
 /// Cost: O(band voxels) memory (about 17 floats per allocated sample, plus φ and the conductance of
 /// the active blocks padded to 10³ during the normal loop: 60–80 bytes per allocated sample at
-/// resolution 256) and time per step (fandisk at 256, 25 steps + refit + band move: about 1.4 s on
+/// resolution 256) and time per step (fandisk at 256, 25 steps + refit + band move: 1.4–2.0 s on
 /// 2 cores, benchmarks/README.md);
 /// threads via TBB over blocks, each step writes a second buffer and reductions are summed in a
 /// fixed order, so the result is bit-identical for any thread count.
