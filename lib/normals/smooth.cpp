@@ -234,6 +234,19 @@ inline bool any_in_row(const std::uint8_t* m) {
     return w != 0;
 }
 
+/// The first and the last y in [lo, kBlockDim) for which has(y) holds, as {y0, y1}; y1 < y0 when
+/// none does. The kernels take the rows y0 … y1 of a plane in one call.
+template <class Has>
+std::pair<int, int> row_span(int lo, Has&& has) {
+    int y0 = kBlockDim, y1 = lo - 1;
+    for (int y = lo; y < kBlockDim; ++y)
+        if (has(y)) {
+            y0 = std::min(y0, y);
+            y1 = y;
+        }
+    return {y0, y1};
+}
+
 /// Σ m·E over the 8³ samples of a block (E in the padded layout, m in the block's): eight lanes,
 /// each summing its column over the rows in order, then a fixed tree; so the same on every thread
 /// and vector width. A mask, not a product: E holds stale values where m is 0. Written with vector
@@ -977,13 +990,8 @@ private:
                     // scalar ninth face each. The extra faces (x = 8, and unflagged rows inside the
                     // run) lie in the buffer and are never read.
                     for (int z = 0; z < kBlockDim; ++z) {
-                        int y0 = kBlockDim, y1 = -1;
-                        for (int y = 0; y < kBlockDim; ++y)
-                            if (rows[row_flag(0, y, z)]) {
-                                y0 = std::min(y0, y);
-                                y1 = y;
-                            }
-                        if (y1 < 0) continue;
+                        const auto [y0, y1] = row_span(0, [&](int y) { return rows[row_flag(0, y, z)] != 0; });
+                        if (y1 < y0) continue;
                         const int count = ((y1 - y0) * L + (kBlockDim + 1) + (kBlockDim - 1)) / kBlockDim * kBlockDim;
                         faces(lidx(-1, y0, z), count, 1);
                     }
@@ -992,12 +1000,7 @@ private:
                     // row (unflagged rows inside the span are computed and never read), so that
                     // the rows' long dependency chains (division, exp) overlap.
                     for (int z = lo[2]; z < kBlockDim; ++z) {
-                        int y0 = kBlockDim, y1 = lo[1] - 1;
-                        for (int y = lo[1]; y < kBlockDim; ++y)
-                            if (rows[row_flag(a, y, z)]) {
-                                y0 = std::min(y0, y);
-                                y1 = y;
-                            }
+                        const auto [y0, y1] = row_span(lo[1], [&](int y) { return rows[row_flag(a, y, z)] != 0; });
                         if (y1 >= y0) faces(lidx(0, y0, z), kBlockDim, y1 - y0 + 1);
                     }
                 }
@@ -1021,12 +1024,7 @@ private:
             // face_row). A row inside the span without any gets dst = N, which dst already holds
             // there (see normal_loop).
             for (int z = 0; z < kBlockDim; ++z) {
-                int y0 = kBlockDim, y1 = -1;
-                for (int y = 0; y < kBlockDim; ++y)
-                    if (any_in_row(M + bidx(0, y, z))) {
-                        y0 = std::min(y0, y);
-                        y1 = y;
-                    }
+                const auto [y0, y1] = row_span(0, [&](int y) { return any_in_row(M + bidx(0, y, z)); });
                 if (y1 >= y0) update_rows(y0, z, y1 - y0 + 1);
             }
             if (nonfinite) bad = true;
@@ -1259,12 +1257,8 @@ private:
             // The span of rows with active samples of each z plane in one call; a row in between
             // without any gets φ, which phi2_ already holds there (see refit_loop).
             for (int z = 0; z < kBlockDim; ++z) {
-                int y0 = kBlockDim, y1 = -1;
-                for (int y = 0; y < kBlockDim; ++y)
-                    if (any_in_row(mask_.data() + base + std::size_t(bidx(0, y, z)))) {
-                        y0 = std::min(y0, y);
-                        y1 = y;
-                    }
+                const std::uint8_t* M = mask_.data() + base;
+                const auto [y0, y1] = row_span(0, [&](int y) { return any_in_row(M + bidx(0, y, z)); });
                 if (y1 < y0) continue;
                 const std::size_t i0 = base + std::size_t(bidx(0, y0, z));
                 nonfinite |= refit_row(P + lidx(0, y0, z), hn_.data() + i0, mask_.data() + i0, dt, y1 - y0 + 1,
