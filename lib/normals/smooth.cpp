@@ -145,9 +145,8 @@ enum class FaceWeight { One, Frozen, Live };
 /// face_terms over `rows` rows of faces q0 + r·L … q0 + r·L + n−1 (each contiguous in x; rows of 8,
 /// or one run across a plane for the x faces), branch-free so that the compiler vectorises it. Rows
 /// are passed several at a time because one row of 8 is one vector iteration whose dependency
-/// chain (the division, the exp) would otherwise stall on its own: the same operations in the
-/// same order as face_terms, so the results are the same operations in the same order as face_terms, so the results are
-/// bit-identical. F = g·m, or 0 where both samples of the face lie outside the band (the faces the
+/// chain (the division, the exp) would otherwise stall on its own. The same operations in the
+/// same order as face_terms, so the results are bit-identical. F = g·m, or 0 where both samples of the face lie outside the band (the faces the
 /// engine skips); g = 1, G[q] or exp(−κ²·inv2mu2) by kWeight. E = the face's energy density: κ²,
 /// G[q]·κ² or (1 − g)·2µ² (the penalty G(κ²) of Eq. 20, as a product where penalty() divides: the
 /// reported G may differ in the last bit, the normals do not).
@@ -968,17 +967,17 @@ private:
             for (int a = 0; a < 3; ++a) {
                 int lo[3] = {0, 0, 0};
                 lo[a] = -1;
-                auto faces = [&](int q0, int count, int rows) {
+                auto faces = [&](int q0, int count, int nrows) {
                     switch (cond) {
                         case FaceWeight::One:
-                            face_rows<FaceWeight::One>(a, P, N[0], nullptr, q0, count, rows, band, inv2mu2, F[a][0], E);
+                            face_rows<FaceWeight::One>(a, P, N[0], nullptr, q0, count, nrows, band, inv2mu2, F[a][0], E);
                             break;
                         case FaceWeight::Frozen:
-                            face_rows<FaceWeight::Frozen>(a, P, N[0], pad_g_[a].data() + k * L3, q0, count, rows, band,
+                            face_rows<FaceWeight::Frozen>(a, P, N[0], pad_g_[a].data() + k * L3, q0, count, nrows, band,
                                                           inv2mu2, F[a][0], E);
                             break;
                         case FaceWeight::Live:
-                            face_rows<FaceWeight::Live>(a, P, N[0], nullptr, q0, count, rows, band, inv2mu2, F[a][0], E);
+                            face_rows<FaceWeight::Live>(a, P, N[0], nullptr, q0, count, nrows, band, inv2mu2, F[a][0], E);
                             break;
                     }
                 };
@@ -1256,8 +1255,8 @@ private:
             int nonfinite = 0;
             // The span of rows with active samples of each z plane in one call; a row in between
             // without any gets φ, which phi2_ already holds there (see refit_loop).
+            const std::uint8_t* M = mask_.data() + base;
             for (int z = 0; z < kBlockDim; ++z) {
-                const std::uint8_t* M = mask_.data() + base;
                 const auto [y0, y1] = row_span(0, [&](int y) { return any_in_row(M + bidx(0, y, z)); });
                 if (y1 < y0) continue;
                 const std::size_t i0 = base + std::size_t(bidx(0, y0, z));
