@@ -25,6 +25,7 @@
 
 #include "core/mesh.h"
 #include "core/volume.h"
+#include "engine_variants.h"
 #include "io/io.h"
 #include "normals/smooth.h"
 #include "sdf/scan_convert.h"
@@ -98,16 +99,9 @@ int main(int argc, char** argv) {
         ScanConvertOptions so;
         so.resolution = resolution;
         const Volume input = scan_convert(mesh, *query, so, nullptr);
-        SmoothOptions o;
+        SmoothOptions o = bench::options_for(mode);
         o.iterations = iterations;
         o.threads = threads;
-        if (mode == "paper25") {
-            o.mode = SmoothMode::Anisotropic;
-            o.normal_steps = 25;
-            o.conductance_presmooth_steps = 0;
-        } else if (mode == "isotropic") {
-            o.mode = SmoothMode::Isotropic;
-        }
         std::vector<double> normals[2], refit[2], reinit[2], per_iteration[2];
         Volume result[2];
         for (int r = 0; r < runs; ++r)

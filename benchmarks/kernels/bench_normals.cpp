@@ -27,6 +27,7 @@
 
 #include "core/mesh.h"
 #include "core/volume.h"
+#include "engine_variants.h"
 #include "io/io.h"
 #include "normals/smooth.h"
 #include "sdf/scan_convert.h"
@@ -116,20 +117,7 @@ const Volume* volume(const std::string& name) {
     return (cache[name] = std::move(v)).get();
 }
 
-/// Option sets: "isotropic" and "anisotropic" are the defaults (anisotropic: 25 conductance
-/// pre-smoothing steps + 50 normal steps); "paper25" is the definition of a main iteration,
-/// anisotropic with the paper's 25 normal steps and no pre-smoothing.
-SmoothOptions options_for(const std::string& variant) {
-    SmoothOptions o;
-    if (variant == "isotropic") {
-        o.mode = SmoothMode::Isotropic;
-    } else if (variant == "paper25") {
-        o.mode = SmoothMode::Anisotropic;
-        o.normal_steps = 25;
-        o.conductance_presmooth_steps = 0;
-    }
-    return o;
-}
+using bench::options_for;
 
 void BM_MainIteration(benchmark::State& state, const std::string& name, const std::string& variant) {
     const Volume* src = volume(name);
