@@ -262,6 +262,11 @@ int run_smooth(const SmoothArgs& a) {
         .set("band_voxels", Json::array(sr.band_voxels)).set("normal_energy", Json::array(sr.normal_energy))
         .set("refit_energy", Json::array(sr.refit_energy));
     if (!sr.mu.empty()) s.set("mu", Json::array(sr.mu));
+    s.set("stopped_unchanged", sr.stopped_unchanged);
+    if (sr.stopped_unchanged)
+        progress.note("smooth: stopped after main iteration " + std::to_string(sr.iterations) + " of " +
+                      std::to_string(opt.iterations > 0 ? opt.iterations : default_iterations(opt.mode)) +
+                      ": its refit kept no step, so the surface no longer changes");
     j.set("smooth", s);
     for (const auto& w : sr.warnings) j["warnings"].push(w);
     Mesh m = volume_to_mesh(v, progress, j, a.input, true);

@@ -483,12 +483,24 @@ public:
                 refit_loop();
                 rep_.seconds_refit += seconds_since(t1);
             }
+            // A refit that kept no step leaves φ bit for bit as this iteration found it (refit_loop
+            // restores it), and the next iteration would start from that φ and the same µ (the
+            // schedule takes the smaller of the last µ and one measured on the same normals): it
+            // and every later one would repeat this one exactly. So stop, with the final
+            // reinitialisation. (Reinitialising the unchanged φ and going on would only let the
+            // interface samples' φ/|∇φ| drift a little each time.)
+            const bool unchanged = opt_.mode != SmoothMode::MeanCurvature && rep_.refit_steps.back() == 0;
             const auto t2 = Clock::now();
             update_band();
-            reinitialise(it + 1 < opt_.iterations ? working_limit() : kHalfWidth);
+            reinitialise(it + 1 < opt_.iterations && !unchanged ? working_limit() : kHalfWidth);
             rep_.seconds_reinit += seconds_since(t2);
             rep_.seconds_per_iteration.push_back(seconds_since(t_it));
             rep_.iterations = it + 1;
+            if (unchanged && it + 1 < opt_.iterations) {
+                rep_.stopped_unchanged = true;
+                detail::tick(progress_, 1.0, "smooth_volume");
+                break;
+            }
         }
     }
 

@@ -98,6 +98,10 @@ struct SmoothReport {
     std::vector<std::size_t> band_voxels;     ///< samples processed (active band) per main iteration
     std::vector<std::size_t> allocated_voxels;  ///< samples held in allocated blocks per main iteration
     std::vector<double> seconds_per_iteration;  ///< wall seconds of each main iteration
+    bool stopped_unchanged = false;  ///< true when smooth_volume stopped before the requested iterations
+                                     ///< because a refit kept no step: φ was then exactly what that
+                                     ///< iteration started from, and every later iteration would
+                                     ///< have repeated it bit for bit (iterations tells which)
     double seconds_normals = 0;  ///< total wall seconds in the normal loop (incl. normals, pre-smoothing)
     double seconds_refit = 0;    ///< total wall seconds in the refit (incl. H_N) or the curvature flow
     double seconds_reinit = 0;   ///< total wall seconds moving the band and reinitialising φ
@@ -115,7 +119,9 @@ struct SmoothReport {
 /// samples by φ/|∇φ| bounded by the axis crossings, the rest by block-Jacobi passes of the Godunov
 /// eikonal update, Jacobi passes inside each block until it settles; between main iterations exact
 /// only as far as an iteration reads φ, active_band + 3 voxels, on return out to the half width).
-/// MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3).
+/// MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3). A main iteration whose refit keeps no
+/// step leaves φ unchanged, so every later one would repeat it: the run stops there
+/// (SmoothReport::stopped_unchanged).
 /// Anisotropic mode regularises the conductance (see SmoothOptions::conductance_presmooth_steps).
 ///
 /// \param v        volume, modified in place: world-unit φ, negative inside. On return its band is

@@ -600,6 +600,36 @@ private:
     int n_;
 };
 
+TEST(SmoothVolume, StopsWhenARefitKeepsNoStepAndTheResultIsThatOfMoreIterations) {
+    // The paper's live conductance at µ = 0.1 on strong noise: g ≈ 0 wherever the noise bends the
+    // normals, so the normal loop hardly moves them and the refit's first step raises D. That
+    // iteration leaves φ as it found it, so the next would repeat it exactly: smooth_volume stops.
+    Volume noisy = make_volume(40, 1.0, sphere_sdf(Vec3d(20.2, 19.8, 20.1), 12.0));
+    add_noise(noisy, 1.0, 5u);
+    SmoothOptions o = options(SmoothMode::Anisotropic, 3);
+    o.conductance_presmooth_steps = 0;
+    o.mu_robust = 0.0f;
+    Volume a = noisy;
+    const SmoothReport ra = smooth_volume(a, o);
+    ASSERT_TRUE(ra.stopped_unchanged);
+    ASSERT_LT(ra.iterations, 3);
+    EXPECT_EQ(ra.refit_steps.back(), 0);
+    EXPECT_EQ(ra.seconds_per_iteration.size(), std::size_t(ra.iterations));
+    // asking for more iterations changes nothing, bit for bit
+    o.iterations = 7;
+    Volume b = noisy;
+    const SmoothReport rb = smooth_volume(b, o);
+    EXPECT_EQ(rb.iterations, ra.iterations);
+    EXPECT_EQ(b.values, a.values);
+    // and the returned φ is the finished band (half width 8), as after a full run
+    EXPECT_EQ(a.half_width, 8.0f);
+    // a run whose refits move φ goes on to the end (the sphere tests above: 5 of 5)
+    Volume c = noisy;
+    const SmoothReport rc = smooth_volume(c, options(SmoothMode::Isotropic, 3));
+    EXPECT_FALSE(rc.stopped_unchanged);
+    EXPECT_EQ(rc.iterations, 3);
+}
+
 TEST(SmoothVolume, CancelStopsPromptlyAndThrowsCancelled) {
     Volume v = make_volume(48, 1.0, sphere_sdf(Vec3d(24, 24, 24), 14.0));
     StopAfter p(3);
