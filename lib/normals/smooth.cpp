@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/band_memory.h"
 #include "core/errors.h"
 
 namespace normalflow {
@@ -70,30 +71,11 @@ double seconds_since(Clock::time_point t0) {
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-/// An allocator whose resize() leaves new elements uninitialised. The engine's per-sample arrays
-/// (φ, the normals and their ping-pong buffers, H_N, the mask) are written by every stage before
-/// it reads them after the band moved (see update_band); zero-filling them first only cost a
-/// serial pass and its page faults over the whole band (0.2 s of the set-up at 256), which the
-/// parallel stages now take as they first write.
-template <class T>
-struct NoInit : std::allocator<T> {
-    template <class U>
-    struct rebind {
-        using other = NoInit<U>;
-    };
-    NoInit() = default;
-    template <class U>
-    NoInit(const NoInit<U>&) noexcept {}
-    template <class U>
-    void construct(U* p) noexcept {
-        ::new (static_cast<void*>(p)) U;
-    }
-    template <class U, class... A>
-    void construct(U* p, A&&... a) {
-        ::new (static_cast<void*>(p)) U(std::forward<A>(a)...);
-    }
-};
-using Samples = std::vector<float, NoInit<float>>;
+/// The engine's per-sample arrays (φ, the normals and their ping-pong buffers, H_N, the mask) are
+/// written by every stage before it reads them after the band moved (see update_band): their
+/// allocator does not zero them on resize (zero-filling only cost a serial pass and its page faults
+/// over the whole band, 0.2 s of the set-up at 256), and maps them in huge pages (core/band_memory.h).
+using Samples = std::vector<float, NoInitAllocator<float>>;
 
 /// Where the halo of one block comes from: its 27 neighbour slots and, per axis and local
 /// coordinate -1..8, which neighbour and which in-block coordinate (clamped at the grid border).
@@ -1394,10 +1376,10 @@ private:
     std::vector<std::array<int, 3>> coords_;
     Samples phi_, phi2_, hn_;
     Samples n_[3], n2_[3], aux_[3];
-    std::vector<float> pad_phi_;  // per active block: φ with its halo (L³), during the normal loop
+    Samples pad_phi_;  // per active block: φ with its halo (L³), during the normal loop
     std::vector<std::uint8_t> row_band_;  // per active block: which rows of faces touch the band (row_flag)
-    std::vector<float> pad_g_[3];  // per active block: frozen conductance of the faces, pad_phi_'s layout
-    std::vector<std::uint8_t, NoInit<std::uint8_t>> mask_;
+    std::vector<float, HugePageAllocator<float>> pad_g_[3];  // per active block: frozen conductance of the faces, pad_phi_'s layout
+    std::vector<std::uint8_t, NoInitAllocator<std::uint8_t>> mask_;
     std::vector<Neighbourhood> nbh_;  // per allocated block, rebuilt when the band moves
     mutable tbb::enumerable_thread_specific<std::vector<float>> scratch_;
     std::vector<std::int32_t> active_;
