@@ -465,7 +465,9 @@ public:
     void run() {
         const auto t_band = Clock::now();
         update_band();
-        reinitialise(opt_.iterations > 0 ? working_limit() : kHalfWidth);
+        // out to the full half width, not just working_limit(): a run that stops in its first
+        // iteration (below) then returns this φ as it is
+        reinitialise(kHalfWidth);
         rep_.seconds_reinit += seconds_since(t_band);
         for (int it = 0; it < opt_.iterations; ++it) {
             const auto t_it = Clock::now();
@@ -494,12 +496,16 @@ public:
             // restores it), and the next iteration would start from that φ and the same µ (the
             // schedule takes the smaller of the last µ and one measured on the same normals): it
             // and every later one would repeat this one exactly. So stop, with the final
-            // reinitialisation. (Reinitialising the unchanged φ and going on would only let the
-            // interface samples' φ/|∇φ| drift a little each time.)
+            // reinitialisation, which φ already had if the last one went out to kHalfWidth (a
+            // stop in the first iteration): the surface did not move, so neither does the band.
+            // (Reinitialising the unchanged φ and going on would only let the interface samples'
+            // φ/|∇φ| drift a little each time.)
             const bool unchanged = opt_.mode != SmoothMode::MeanCurvature && rep_.refit_steps.back() == 0;
             const auto t2 = Clock::now();
-            update_band();
-            reinitialise(it + 1 < opt_.iterations && !unchanged ? working_limit() : kHalfWidth);
+            if (!(unchanged && reinit_limit_ >= kHalfWidth)) {
+                update_band();
+                reinitialise(it + 1 < opt_.iterations && !unchanged ? working_limit() : kHalfWidth);
+            }
             rep_.seconds_reinit += seconds_since(t2);
             rep_.seconds_per_iteration.push_back(seconds_since(t_it));
             rep_.iterations = it + 1;
@@ -752,6 +758,7 @@ private:
     /// The sweeps stop when the distances below limit have converged; those at or above it are
     /// then at least limit (the sweeps only lower an upper bound), not necessarily converged.
     void reinitialise(float limit) {
+        reinit_limit_ = limit;
         const std::size_t nb = nblocks();
         std::vector<std::int32_t> all(nb);
         for (std::size_t b = 0; b < nb; ++b) all[b] = std::int32_t(b);
@@ -1370,6 +1377,7 @@ private:
     Progress* progress_;
     float inv2mu2_ = 50.0f;
     int iteration_ = 0;
+    float reinit_limit_ = 0.0f;  // limit of the last reinitialise(): φ is a distance below it
 
     std::array<int, 3> block_dims_{};
     std::vector<std::int32_t> table_;
