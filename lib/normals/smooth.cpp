@@ -652,6 +652,16 @@ private:
     }
 
     // ---------------------------------------------------------------- band
+    /// Resizes a work array to n elements, reallocating with a quarter of headroom when it must grow.
+    template <class V>
+    static void fit_samples(V& v, std::size_t n) {
+        if (v.capacity() < n) {
+            v = {};
+            v.reserve(n + n / 4);
+        }
+        v.resize(n);
+    }
+
     /// Blocks holding the surface (a sign change to a 6-neighbour, or |φ| < 1) plus their 26
     /// neighbours stay or become allocated; every other block becomes a tile of its sign.
     void update_band() {
@@ -694,12 +704,14 @@ private:
                     }
         }
         std::vector<std::array<int, 3>> coords;
-        Samples phi;
         std::vector<std::int32_t> table(table_.size());
         std::size_t count = 0;
         for (std::size_t t = 0; t < table_.size(); ++t) count += req[t];
         coords.reserve(count);
-        phi.resize(count * kBlockVoxels);
+        // The new φ goes into phi2_'s buffer (free between stages, its pages already touched
+        // after the first main iteration), which then becomes phi_.
+        Samples& phi = phi2_;
+        fit_samples(phi, count * kBlockVoxels);
         for (int z = 0; z < block_dims_[2]; ++z)
             for (int y = 0; y < block_dims_[1]; ++y)
                 for (int x = 0; x < block_dims_[0]; ++x) {
@@ -723,7 +735,7 @@ private:
                 }
         table_ = std::move(table);
         coords_ = std::move(coords);
-        phi_ = std::move(phi);
+        std::swap(phi_, phi2_);
         // The per-sample work arrays: every stage writes what it reads after the blocks moved, so
         // their contents need not survive (their slots changed anyway). A growing array is
         // reallocated with headroom rather than copied: as the band moves it grows by a few blocks
@@ -731,13 +743,7 @@ private:
         // faults) took 0.2–0.3 s per call on bunny at resolution 256, serial. Untouched headroom
         // costs address space, not memory.
         const std::size_t n = phi_.size();
-        auto fit = [n](auto& v) {
-            if (v.capacity() < n) {
-                v = {};
-                v.reserve(n + n / 4);
-            }
-            v.resize(n);
-        };
+        auto fit = [n](auto& v) { fit_samples(v, n); };
         fit(phi2_);
         for (int c = 0; c < 3; ++c) {
             fit(n_[c]);
@@ -1329,13 +1335,14 @@ private:
     }
 
     /// Refit steps until D stops decreasing; φ ends as the iterate with the smallest D seen.
-    /// Buffers: phi_ (current), phi2_ (written by the step), aux_[1] (the previous iterate, kept
-    /// so that a step that raised D can be undone). Samples outside the active blocks are equal
-    /// in all three (refit_step writes only the active blocks).
+    /// Buffers: phi_ (current), phi2_ (written by the step), aux_[0] (the previous iterate, kept
+    /// so that a step that raised D can be undone; the buffer the reinitialisation has already
+    /// written, so no fresh pages are touched). Samples outside the active blocks are equal in
+    /// all three (refit_step writes only the active blocks).
     void refit_loop() {
         target_curvature();  // may use phi2_ as scratch
         phi2_ = phi_;
-        Samples& prev_phi = aux_[1];
+        Samples& prev_phi = aux_[0];
         prev_phi = phi_;
         std::vector<double> ds;  // D of each iterate evaluated
         int steps = 0;
