@@ -435,8 +435,9 @@ public:
         coords_ = v.block_coords;
         const float inv_h = float(1.0 / v.grid.voxel_size);
         phi_.resize(v.values.size());
-        for (std::size_t i = 0; i < v.values.size(); ++i)
+        for_samples(v.values.size(), [&](std::size_t i) {
             phi_[i] = std::clamp(v.values[i] * inv_h, -kHalfWidth, kHalfWidth);
+        });
         inv2mu2_ = 1.0f / (2.0f * opt.mu * opt.mu);
     }
 
@@ -478,7 +479,7 @@ public:
             if (opt_.mode == SmoothMode::MeanCurvature) {
                 const auto t0 = Clock::now();
                 std::fill(hn_.begin(), hn_.end(), 0.0f);
-                phi2_ = phi_;  // refit_step writes only the active blocks of phi2_
+                copy_samples(phi_, phi2_);  // refit_step writes only the active blocks of phi2_
                 for (int s = 0; s < opt_.normal_steps; ++s) {
                     refit_step(false);
                     tick(double(s + 1) / opt_.normal_steps);
@@ -531,7 +532,7 @@ public:
         v.block_table = table_;
         v.block_coords = coords_;
         v.values.resize(phi_.size());
-        for (std::size_t i = 0; i < phi_.size(); ++i) v.values[i] = phi_[i] * h;
+        for_samples(phi_.size(), [&](std::size_t i) { v.values[i] = phi_[i] * h; });
     }
 
 private:
@@ -652,6 +653,26 @@ private:
     }
 
     // ---------------------------------------------------------------- band
+    /// body(lo, hi) over [0, n) in chunks of 64 Ki samples, in parallel: elementwise passes over the
+    /// whole band, whose first writes to a fresh buffer cost page faults that one thread would take
+    /// one after another.
+    template <class Body>
+    static void for_chunks(std::size_t n, Body&& body) {
+        constexpr std::size_t kChunk = std::size_t(1) << 16;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, (n + kChunk - 1) / kChunk),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t c = r.begin(); c != r.end(); ++c)
+                                  body(c * kChunk, std::min(n, (c + 1) * kChunk));
+                          });
+    }
+    /// body(i) for every i in [0, n), in parallel (for_chunks).
+    template <class Body>
+    static void for_samples(std::size_t n, Body&& body) {
+        for_chunks(n, [&](std::size_t lo, std::size_t hi) {
+            for (std::size_t i = lo; i < hi; ++i) body(i);
+        });
+    }
+
     /// Resizes a work array to n elements, reallocating with a quarter of headroom when it must grow.
     template <class V>
     static void fit_samples(V& v, std::size_t n) {
@@ -891,33 +912,39 @@ private:
             std::swap(phi2_, aux_[0]);  // u <-> u2 (references follow the buffers' names)
         }
         // after the swaps the newest distances are in phi2_ (u refers to phi2_)
-        for (std::size_t i = 0; i < phi_.size(); ++i) {
+        for_samples(phi_.size(), [&](std::size_t i) {
             const float d = std::min(phi2_[i], kHalfWidth);
             phi_[i] = phi_[i] < 0.0f ? -d : d;
-        }
+        });
     }
 
     // ---------------------------------------------------------------- active band
     void build_active() {
+        const float band = opt_.active_band;
+        std::vector<std::uint32_t> count(nblocks());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                const auto& c = coords_[b];
+                int ext[3];
+                for (int a = 0; a < 3; ++a) ext[a] = std::min(kBlockDim, grid_.dims[a] - c[a] * kBlockDim);
+                std::uint32_t cnt = 0;
+                const std::size_t base = b * kBlockVoxels;
+                for (int z = 0; z < kBlockDim; ++z)
+                    for (int y = 0; y < kBlockDim; ++y)
+                        for (int x = 0; x < kBlockDim; ++x) {
+                            const std::size_t i = base + std::size_t(bidx(x, y, z));
+                            const bool a = x < ext[0] && y < ext[1] && z < ext[2] && std::abs(phi_[i]) <= band;
+                            mask_[i] = a;
+                            cnt += a;
+                        }
+                count[b] = cnt;
+            }
+        });
         active_.clear();
         active_voxels_ = 0;
-        const float band = opt_.active_band;
         for (std::size_t b = 0; b < nblocks(); ++b) {
-            const auto& c = coords_[b];
-            int ext[3];
-            for (int a = 0; a < 3; ++a) ext[a] = std::min(kBlockDim, grid_.dims[a] - c[a] * kBlockDim);
-            std::size_t cnt = 0;
-            const std::size_t base = b * kBlockVoxels;
-            for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y)
-                    for (int x = 0; x < kBlockDim; ++x) {
-                        const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        const bool a = x < ext[0] && y < ext[1] && z < ext[2] && std::abs(phi_[i]) <= band;
-                        mask_[i] = a;
-                        cnt += a;
-                    }
-            if (cnt) active_.push_back(std::int32_t(b));
-            active_voxels_ += cnt;
+            if (count[b]) active_.push_back(std::int32_t(b));
+            active_voxels_ += count[b];
         }
     }
 
@@ -1155,8 +1182,16 @@ private:
         return mu;
     }
 
+    /// dst = src, in parallel (see for_samples).
+    static void copy_samples(const Samples& src, Samples& dst) {
+        fit_samples(dst, src.size());
+        for_chunks(src.size(), [&](std::size_t lo, std::size_t hi) {
+            std::memcpy(dst.data() + lo, src.data() + lo, sizeof(float) * (hi - lo));
+        });
+    }
+
     void copy_fields(Samples (&src)[3], Samples (&dst)[3]) {
-        for (int c = 0; c < 3; ++c) dst[c] = src[c];
+        for (int c = 0; c < 3; ++c) copy_samples(src[c], dst[c]);
     }
 
     void normal_loop() {
@@ -1341,9 +1376,9 @@ private:
     /// all three (refit_step writes only the active blocks).
     void refit_loop() {
         target_curvature();  // may use phi2_ as scratch
-        phi2_ = phi_;
+        copy_samples(phi_, phi2_);
         Samples& prev_phi = aux_[0];
-        prev_phi = phi_;
+        copy_samples(phi_, prev_phi);
         std::vector<double> ds;  // D of each iterate evaluated
         int steps = 0;
         double prev = 0.0, d_end = 0.0;
