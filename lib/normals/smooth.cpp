@@ -729,6 +729,8 @@ private:
         std::size_t count = 0;
         for (std::size_t t = 0; t < table_.size(); ++t) count += req[t];
         coords.reserve(count);
+        std::vector<std::int32_t> source;  // per new slot: the old slot, or the tile it was
+        source.reserve(count);
         // The new φ goes into phi2_'s buffer (free between stages, its pages already touched
         // after the first main iteration), which then becomes phi_.
         Samples& phi = phi2_;
@@ -741,12 +743,7 @@ private:
                     if (req[t]) {
                         const std::int32_t slot = std::int32_t(coords.size());
                         coords.push_back({x, y, z});
-                        float* dst = phi.data() + std::size_t(slot) * kBlockVoxels;
-                        if (old >= 0)
-                            std::memcpy(dst, phi_.data() + std::size_t(old) * kBlockVoxels,
-                                        sizeof(float) * kBlockVoxels);
-                        else
-                            std::fill(dst, dst + kBlockVoxels, old == kBlockInside ? -kHalfWidth : kHalfWidth);
+                        source.push_back(old);
                         table[t] = slot;
                     } else if (old >= 0) {
                         table[t] = phi_[std::size_t(old) * kBlockVoxels] < 0.0f ? kBlockInside : kBlockOutside;
@@ -754,6 +751,17 @@ private:
                         table[t] = old;
                     }
                 }
+        // the blocks' values, in parallel (their first writes to a fresh buffer fault)
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t slot = r.begin(); slot != r.end(); ++slot) {
+                float* dst = phi.data() + slot * kBlockVoxels;
+                const std::int32_t old = source[slot];
+                if (old >= 0)
+                    std::memcpy(dst, phi_.data() + std::size_t(old) * kBlockVoxels, sizeof(float) * kBlockVoxels);
+                else
+                    std::fill(dst, dst + kBlockVoxels, old == kBlockInside ? -kHalfWidth : kHalfWidth);
+            }
+        });
         table_ = std::move(table);
         coords_ = std::move(coords);
         std::swap(phi_, phi2_);
