@@ -772,15 +772,14 @@ private:
         // faults) took 0.2–0.3 s per call on bunny at resolution 256, serial. Untouched headroom
         // costs address space, not memory.
         const std::size_t n = phi_.size();
-        auto fit = [n](auto& v) { fit_samples(v, n); };
-        fit(phi2_);
+        fit_samples(phi2_, n);
         for (int c = 0; c < 3; ++c) {
-            fit(n_[c]);
-            fit(n2_[c]);
-            fit(aux_[c]);
+            fit_samples(n_[c], n);
+            fit_samples(n2_[c], n);
+            fit_samples(aux_[c], n);
         }
-        fit(hn_);
-        fit(mask_);
+        fit_samples(hn_, n);
+        fit_samples(mask_, n);
         nbh_.resize(nblocks());
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks(), 64),
                           [&](const tbb::blocked_range<std::size_t>& r) {
