@@ -2,7 +2,11 @@
 // process, their runs interleaved (A B B A A B ...), on the same volume.
 //
 //   nf_ab_engine LIB_A LIB_B [--mesh PATH] [--resolution 256] [--runs 8] [--threads 1]
-//                [--mode paper25|isotropic|anisotropic] [--iterations 1]
+//                [--mode paper25|isotropic|anisotropic|highboost|mcf|second_order] [--iterations 1]
+//
+// The modes are the variants of engine_variants.h; together they take every path of the engine, so
+// a refactoring that must not change the results is checked with each (use --iterations 2: paper25
+// stops after its first main iteration by design).
 //
 // On shared machines the speed drifts by ±15 % between runs minutes apart, more than most changes
 // to a kernel gain; runs interleaved within one process see the same drift, and the minimum and the
@@ -87,9 +91,10 @@ int main(int argc, char** argv) {
         } else libs.push_back(argv[a]);
     }
     if (libs.size() != 2 || resolution < 8 || runs < 1 || threads < 0 || iterations < 1 ||
-        (mode != "paper25" && mode != "isotropic" && mode != "anisotropic")) {
+        !bench::is_variant(mode)) {
         std::fprintf(stderr, "usage: nf_ab_engine LIB_A LIB_B [--mesh PATH] [--resolution N] [--runs N] "
-                             "[--threads N] [--mode paper25|isotropic|anisotropic] [--iterations N]\n");
+                             "[--threads N] [--mode paper25|isotropic|anisotropic|highboost|mcf|second_order] "
+                             "[--iterations N]\n");
         return 2;
     }
     const SmoothFn fn[2] = {load(libs[0]), load(libs[1])};
