@@ -1,0 +1,15 @@
+#include "normals/stages/normal_filter.h"
+
+namespace normalflow::engine {
+
+std::unique_ptr<NormalFilter> make_normal_filter(SmoothMode mode) {
+    switch (mode) {
+        case SmoothMode::Isotropic: return make_isotropic_filter();
+        case SmoothMode::Anisotropic: return make_anisotropic_filter();
+        case SmoothMode::HighBoost: return make_highboost_filter();
+        case SmoothMode::MeanCurvature: return nullptr;
+    }
+    return nullptr;
+}
+
+}  // namespace normalflow::engine
