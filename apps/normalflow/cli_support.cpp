@@ -1,6 +1,5 @@
 #include "cli_support.h"
 
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -29,12 +28,6 @@ void install_interrupt_handler() {
 }
 
 bool interrupted() { return g_interrupted.load(); }
-
-std::size_t peak_memory_bytes() {
-    rusage ru{};
-    getrusage(RUSAGE_SELF, &ru);
-    return std::size_t(ru.ru_maxrss) * 1024;  // Linux: kilobytes
-}
 
 TerminalProgress::TerminalProgress(const OutputFlags& f)
     : show_(!f.quiet && !f.json && ::isatty(STDERR_FILENO)), quiet_(f.quiet || f.json) {}
@@ -97,17 +90,6 @@ int guarded(const char* command, int (*fn)(void*), void* ctx) {
     }
 }
 
-std::size_t available_memory_bytes() {
-    std::FILE* f = std::fopen("/proc/meminfo", "r");
-    if (!f) return 0;
-    char line[256];
-    std::size_t kb = 0;
-    while (std::fgets(line, sizeof line, f))
-        if (std::sscanf(line, "MemAvailable: %zu kB", &kb) == 1) break;
-    std::fclose(f);
-    return kb * 1024;
-}
-
 std::size_t parse_bytes(const std::string& text, const char* option) {
     char* end = nullptr;
     const double value = std::strtod(text.c_str(), &end);
@@ -122,14 +104,6 @@ std::size_t parse_bytes(const std::string& text, const char* option) {
     if (end == text.c_str() || unit == 0 || !(value > 0) || !std::isfinite(value))
         throw InvalidInput(std::string(option) + ": '" + text + "' is not a size (examples: 4G, 512M, 100000)");
     return static_cast<std::size_t>(value * unit);
-}
-
-std::string format_bytes(double bytes) {
-    char buf[64];
-    if (bytes >= 1e9) std::snprintf(buf, sizeof buf, "%.2f GB", bytes / 1e9);
-    else if (bytes >= 1e6) std::snprintf(buf, sizeof buf, "%.1f MB", bytes / 1e6);
-    else std::snprintf(buf, sizeof buf, "%.0f kB", bytes / 1e3);
-    return buf;
 }
 
 void add_output_flags(CLI::App* cmd, OutputFlags& out) {

@@ -3,11 +3,13 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <map>
 #include <memory>
 #include <string>
 
 #include "core/progress.h"
 #include "io/formats/json.h"
+#include "io/pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
 
 namespace normalflow::cli {
 
@@ -41,18 +43,9 @@ private:
 void install_interrupt_handler();
 bool interrupted();
 
-/// Peak resident memory of this process, bytes.
-std::size_t peak_memory_bytes();
-
-/// Memory the system can give this process now (MemAvailable of /proc/meminfo), bytes; 0 if unknown.
-std::size_t available_memory_bytes();
-
 /// "4G", "512M", "1.5g", "100000": a byte count (K, M, G, T are powers of 1024).
 /// \throw InvalidInput naming the option for anything else.
 std::size_t parse_bytes(const std::string& text, const char* option);
-
-/// "1.23 GB"-style rendering of a byte count.
-std::string format_bytes(double bytes);
 
 /// Wall-clock stopwatch in seconds.
 class Stopwatch {
@@ -78,6 +71,26 @@ int guarded(const char* command, int (*fn)(void*), void* ctx);
 
 /// Adds --json and --quiet to a subcommand.
 void add_output_flags(CLI::App* cmd, OutputFlags& out);
+
+/// The name of `value` in `names` (the command line's spelling of an enum value).
+template <class E>
+std::string name_of(const std::map<std::string, E>& names, E value) {
+    for (const auto& [name, v] : names)
+        if (v == value) return name;
+    return "?";
+}
+
+/// Adds an option that parses one of `names` straight into the enum `target`; the help shows the
+/// names and the default (target's value when the option is added: the library's default).
+template <class E>
+CLI::Option* add_enum_option(CLI::App* cmd, const std::string& flag, E& target, const std::map<std::string, E>& names,
+                             const std::string& help) {
+    std::string choices;
+    for (const auto& [name, v] : names) choices += (choices.empty() ? "" : "|") + name;
+    CLI::Validator parse = CLI::CheckedTransformer(names);
+    parse.description("");
+    return cmd->add_option(flag, target, help)->transform(parse)->type_name(choices)->default_str(name_of(names, target));
+}
 
 /// Makes cmd run fn(*args) under guarded() once parsed; the exit status reaches main() as a
 /// CLI::RuntimeError, which CLI::App::exit returns without printing.

@@ -5,19 +5,18 @@
 
 #include "commands.h"
 #include "core/errors.h"
+#include "io/cgal/cleanup.h"  // plain option and report structs; the code needs CGAL
 #include "io/io.h"
-#ifdef NORMALFLOW_HAS_CGAL
-#include "io/cgal/cleanup.h"
-#endif
+#include "io/pipeline/report_json.h"
 
 namespace normalflow::cli {
 namespace {
 
+/// The flags parse straight into CleanupOptions; the reduction follows from which of
+/// --target-faces, --max-error, --edge-length is given.
 struct CleanupArgs {
     std::string input, output;
-    std::size_t target_faces = 0;
-    double max_error = 0.0, edge_length = 0.0, min_component = 0.0;
-    bool no_repair = false;
+    cgal::CleanupOptions cleanup;
     OutputFlags out;
 };
 
@@ -25,27 +24,18 @@ int run_cleanup(const CleanupArgs& a) {
 #ifdef NORMALFLOW_HAS_CGAL
     if (mesh_format_from_path(a.output) == MeshFormat::Unknown)
         throw InvalidInput("cleanup: " + a.output + ": unknown output format");
-    const int modes = (a.target_faces > 0) + (a.max_error > 0) + (a.edge_length > 0);
+    cgal::CleanupOptions o = a.cleanup;
+    const int modes = (o.target_faces > 0) + (o.max_error > 0) + (o.target_edge_length > 0);
     if (modes > 1) throw InvalidInput("cleanup: give at most one of --target-faces, --max-error, --edge-length");
+    if (o.target_faces > 0) o.reduction = cgal::CleanupReduction::FaceCount;
+    if (o.max_error > 0) o.reduction = cgal::CleanupReduction::ErrorBound;
+    if (o.target_edge_length > 0) o.reduction = cgal::CleanupReduction::Remesh;
     Mesh m = read_mesh(a.input);
-    cgal::CleanupOptions o;
-    o.min_component_fraction = a.min_component;
-    o.repair_self_intersections = !a.no_repair;
-    if (a.target_faces > 0) { o.reduction = cgal::CleanupReduction::FaceCount; o.target_faces = a.target_faces; }
-    if (a.max_error > 0) { o.reduction = cgal::CleanupReduction::ErrorBound; o.max_error = a.max_error; }
-    if (a.edge_length > 0) { o.reduction = cgal::CleanupReduction::Remesh; o.target_edge_length = a.edge_length; }
     const cgal::CleanupReport r = cgal::cleanup_mesh(m, o);
     write_mesh(a.output, m);
     if (a.out.json) {
-        Json j = Json::object();
-        j.set("command", "cleanup").set("input", a.input).set("output", a.output)
-            .set("faces_before", r.faces_before).set("faces_after", r.faces_after)
-            .set("degenerate_removed", r.degenerate_removed).set("components_removed", r.components_removed)
-            .set("components_reversed", r.components_reversed).set("hausdorff", r.hausdorff)
-            .set("result_to_input", r.result_to_input).set("input_to_result", r.input_to_result)
-            .set("closed", r.closed).set("manifold", r.manifold).set("self_intersections", r.self_intersections)
-            .set("self_intersections_found", r.self_intersections_found)
-            .set("seconds", r.seconds).set("warnings", Json::array(r.warnings));
+        Json j = to_json(r);
+        j.set("command", "cleanup").set("input", a.input).set("output", a.output);
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {
         std::printf("cleanup: %s -> %s: %zu -> %zu faces, Hausdorff %.6g, %s, %s, %zu self-intersections (%zu before "
@@ -69,14 +59,16 @@ void add_cleanup_command(CLI::App& app) {
     auto* cmd = app.add_subcommand("cleanup", "remove slivers and small parts, orient, decimate or remesh (CGAL)");
     cmd->add_option("IN", a->input, "mesh file")->required();
     cmd->add_option("OUT", a->output, "mesh file")->required();
-    cmd->add_option("--target-faces", a->target_faces, "decimate to at most N faces (edge collapse)");
-    cmd->add_option("--max-error", a->max_error, "decimate while within E (world units) of the input")
+    cgal::CleanupOptions& o = a->cleanup;
+    cmd->add_option("--target-faces", o.target_faces, "decimate to at most N faces (edge collapse)");
+    cmd->add_option("--max-error", o.max_error, "decimate while within E (world units) of the input")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--edge-length", a->edge_length, "isotropic remeshing to edge length L (world units)")
+    cmd->add_option("--edge-length", o.target_edge_length, "isotropic remeshing to edge length L (world units)")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--min-component", a->min_component, "drop components below this fraction of the faces")
-        ->check(CLI::Range(0.0, 0.999999));
-    cmd->add_flag("--no-repair", a->no_repair, "do not repair self-intersecting faces (only report them)");
+    cmd->add_option("--min-component", o.min_component_fraction, "drop components below this fraction of the faces")
+        ->check(CLI::Range(0.0, 0.999999))->capture_default_str();
+    cmd->add_flag("!--no-repair", o.repair_self_intersections,
+                  "do not repair self-intersecting faces (only report them)");
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_cleanup);
 }

@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "core/mesh_report.h"
 #include "io/io.h"
+#include "io/pipeline/report_json.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/repair.h"
 #endif
@@ -45,29 +46,13 @@ int run_info(const InfoArgs& a) {
     if (a.self_intersections) throw InvalidInput("info: --self-intersections needs a build with CGAL");
 #endif
     if (a.out.json) {
-        Json j = Json::object();
+        Json j = to_json(r);  // every MeshReport field
         j.set("command", "info").set("input", a.input).set("format", info.format);
         j.set("file_vertices", info.file_vertices).set("file_faces", info.file_faces);
         j.set("polygons_split", info.polygons_split);
-        j.set("vertices", r.vertices).set("triangles", r.faces).set("components", r.components);
-        j.set("boundary_edges", r.boundary_edges).set("non_manifold_edges", r.non_manifold_edges);
-        j.set("non_manifold_vertices", r.non_manifold_vertices).set("degenerate_faces", r.degenerate_faces);
-        j.set("duplicate_faces", r.duplicate_faces).set("inconsistent_edges", r.inconsistent_edges);
-        j.set("closed", r.closed).set("manifold", r.manifold).set("oriented", r.oriented);
-        j.set("euler_characteristic", r.euler_characteristic).set("area", r.area).set("volume", r.volume);
-        Json box = Json::array();
-        for (double c : {r.bbox.min.x, r.bbox.min.y, r.bbox.min.z, r.bbox.max.x, r.bbox.max.y, r.bbox.max.z}) box.push(c);
-        j.set("bbox", box);
         if (self_intersections >= 0) j.set("self_intersecting_pairs", self_intersections);
 #ifdef NORMALFLOW_HAS_CGAL
-        if (repaired) {
-            Json rj = Json::object();
-            rj.set("points_merged", rep.points_merged).set("degenerate_removed", rep.degenerate_removed);
-            rj.set("duplicates_removed", rep.duplicates_removed).set("faces_reversed", rep.faces_reversed);
-            rj.set("orientable", rep.orientable).set("patches_inverted", rep.patches_inverted);
-            rj.set("open_patches", rep.open_patches).set("warnings", Json::array(rep.warnings));
-            j.set("repair", rj);
-        }
+        if (repaired) j.set("repair", to_json(rep));
 #endif
         j.set("repaired", repaired);
         Json w = Json::array(info.warnings);

@@ -1,5 +1,6 @@
 // normalflow noise IN OUT --sigma S [--seed K] [--kind gaussian|impulsive] [--direction normal|random]
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 
@@ -13,25 +14,25 @@ namespace {
 
 struct NoiseArgs {
     std::string input, output;
-    NoiseOptions noise;
-    std::string kind = "gaussian";
-    std::string direction = "normal";
+    NoiseOptions noise;  ///< the flags parse straight into it
     OutputFlags out;
 };
+
+const std::map<std::string, NoiseKind> kKinds = {{"gaussian", NoiseKind::Gaussian}, {"impulsive", NoiseKind::Impulsive}};
+const std::map<std::string, NoiseDirection> kDirections = {{"normal", NoiseDirection::Normal},
+                                                           {"random", NoiseDirection::Random}};
 
 int run_noise(const NoiseArgs& a) {
     Stopwatch clock;
     Mesh mesh = read_mesh(a.input);
-    NoiseOptions o = a.noise;
-    o.kind = a.kind == "impulsive" ? NoiseKind::Impulsive : NoiseKind::Gaussian;
-    o.direction = a.direction == "random" ? NoiseDirection::Random : NoiseDirection::Normal;
+    const NoiseOptions& o = a.noise;
     const NoiseReport r = add_noise(mesh, o);
     write_mesh(a.output, mesh);
     if (a.out.json) {
         Json j = Json::object();
         j.set("command", "noise").set("input", a.input).set("output", a.output);
         j.set("sigma", o.sigma).set("seed", static_cast<unsigned long long>(o.seed));
-        j.set("kind", a.kind).set("direction", a.direction);
+        j.set("kind", name_of(kKinds, o.kind)).set("direction", name_of(kDirections, o.direction));
         j.set("mean_edge_length", r.mean_edge_length).set("sigma_world", r.sigma_world);
         j.set("vertices", r.vertices).set("displaced", r.displaced).set("rms_displacement", r.rms_displacement);
         j.set("seconds", clock.seconds());
@@ -54,10 +55,8 @@ void add_noise_command(CLI::App& app) {
     cmd->add_option("--sigma", args->noise.sigma, "standard deviation, multiple of the mean edge length")
         ->required()->check(CLI::NonNegativeNumber);
     cmd->add_option("--seed", args->noise.seed, "random seed")->capture_default_str();
-    cmd->add_option("--kind", args->kind, "gaussian or impulsive")
-        ->check(CLI::IsMember({"gaussian", "impulsive"}))->capture_default_str();
-    cmd->add_option("--direction", args->direction, "normal or random")
-        ->check(CLI::IsMember({"normal", "random"}))->capture_default_str();
+    add_enum_option(cmd, "--kind", args->noise.kind, kKinds, "gaussian or impulsive");
+    add_enum_option(cmd, "--direction", args->noise.direction, kDirections, "normal or random");
     cmd->add_option("--fraction", args->noise.impulsive_fraction, "fraction of vertices displaced by impulsive noise")
         ->check(CLI::Range(0.0, 1.0))->capture_default_str();
     add_output_flags(cmd, args->out);

@@ -1,42 +1,25 @@
-// normalflow voxelize / extract / smooth: the pipeline read → repair → scan_convert → smooth → extract → write.
-#include <algorithm>
+// normalflow voxelize / extract / smooth: the pipeline read → repair → scan_convert → smooth → extract →
+// write. The stages between read and write are the library's smooth_mesh (io/pipeline/pipeline.h);
+// the flags parse straight into its PipelineOptions, so every default is the library's.
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 
 #include "commands.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
-#include "extract/extract_surface.h"
 #include "io/io.h"
-#include "normals/smooth.h"
-#include "sdf/memory_estimate.h"
-#include "sdf/scan_convert.h"
-#ifdef NORMALFLOW_HAS_CGAL
-#include "io/cgal/aabb_distance.h"
-#include "io/cgal/cleanup.h"
-#include "io/cgal/repair.h"
-#endif
+#include "io/pipeline/pipeline.h"
+#include "io/pipeline/report_json.h"
 
 namespace normalflow::cli {
 
 namespace {
 
-/// How the mesh becomes a volume (shared by voxelize and smooth).
-struct GridArgs {
-    int resolution = 256;      ///< voxels along the longest side of the bounding box
-    double voxel_size = 0;     ///< world units; overrides resolution when > 0
-    float band = 3.0f;         ///< band half-width in voxels
-    double shell = 0;          ///< world units: process an open sheet as a shell of this thickness
-    bool repair = true;        ///< merge points, drop degenerate faces, orient, before scan conversion
-    int threads = 0;           ///< 0 = all cores
-    std::string max_memory;    ///< refuse runs estimated above this ("4G"); default: what the system has
-    bool smoothing = false;    ///< the engine runs after scan conversion (for the memory estimate)
-};
-
 struct VoxelizeArgs {
     std::string input, output;
-    GridArgs grid;
+    PipelineOptions pipeline;
     OutputFlags out;
 };
 
@@ -47,124 +30,81 @@ struct ExtractArgs {
 
 struct SmoothArgs {
     std::string input, output;
-    GridArgs grid;
-    std::string mode = "anisotropic";  ///< isotropic | anisotropic | highboost | mcf
-    // Defaults are the library's (SmoothOptions), tuned on the real noisy pairs.
-    int iterations = SmoothOptions{}.iterations;      ///< main iterations
-    int normal_steps = SmoothOptions{}.normal_steps;  ///< normal-loop steps per main iteration
-    float mu = SmoothOptions{}.mu;                    ///< 1/voxel, anisotropic conductance scale
-    float alpha = SmoothOptions{}.alpha;              ///< high-boost amount
-    int presmooth = -1;                ///< conductance pre-smoothing steps (-1: library default)
-    float mu_robust = SmoothOptions{}.mu_robust;  ///< robust conductance scale factor (0: fixed mu)
-    bool second_order = false;         ///< Appendix A's second term in the refit
-    std::size_t target_faces = 0;      ///< > 0: decimate the extracted mesh (CGAL edge collapse)
+    PipelineOptions pipeline;
     DracoOptions draco;                ///< quantization and level for .drc / .glb outputs
     OutputFlags out;
 };
 
-void add_grid_options(CLI::App* cmd, GridArgs& g) {
-    cmd->add_option("--resolution", g.resolution, "voxels along the longest bounding-box side")
-        ->check(CLI::Range(8, 8192));
-    cmd->add_option("--voxel-size", g.voxel_size, "voxel size in world units (overrides --resolution)")
+/// Flags of voxelize and smooth, straight into PipelineOptions (its defaults are the help's).
+void add_grid_options(CLI::App* cmd, PipelineOptions& p) {
+    cmd->add_option("--resolution", p.scan.resolution, "voxels along the longest bounding-box side")
+        ->check(CLI::Range(8, 8192))->capture_default_str();
+    cmd->add_option("--voxel-size", p.scan.voxel_size, "voxel size in world units (overrides --resolution)")
         ->check(CLI::PositiveNumber);
-    cmd->add_option("--shell", g.shell, "process an open sheet as a shell of this thickness (world units)")
+    cmd->add_option("--shell", p.scan.shell_thickness,
+                    "process an open sheet as a shell of this thickness (world units)")
         ->check(CLI::NonNegativeNumber);
-    cmd->add_flag("!--no-repair", g.repair, "do not merge points, drop degenerate faces and orient first");
-    cmd->add_option("--max-memory", g.max_memory,
-                    "refuse a run estimated to need more than this (e.g. 4G; default: the memory available)");
-    cmd->add_option("--threads", g.threads, "worker threads (0: all cores); results do not depend on it")
+    cmd->add_flag("!--no-repair", p.repair, "do not merge points, drop degenerate faces and orient first");
+    std::map<std::string, DistanceQuery> queries;
+    for (DistanceQuery q : {DistanceQuery::EngineBvh, DistanceQuery::CgalAabb}) queries[to_string(q)] = q;
+    add_enum_option(cmd, "--distance", p.distance, queries,
+                    "closest-triangle search: bvh (the engine's) or aabb (CGAL's AABB tree); same distances");
+    cmd->add_option("--max-memory", p.max_memory_bytes,
+                    "refuse a run estimated to need more than this (e.g. 4G; default: the memory available)")
+        ->transform(CLI::Validator(
+            [](std::string& s) {
+                try {
+                    s = std::to_string(parse_bytes(s, "--max-memory"));
+                    return std::string();
+                } catch (const InvalidInput& e) {  // CLI11 puts the flag's name in front itself
+                    const std::string m = e.what();
+                    return m.substr(m.find(": ") + 2);
+                }
+            },
+            "SIZE"));
+    cmd->add_option("--threads", p.scan.threads, "worker threads (0: all cores); results do not depend on it")
         ->check(CLI::NonNegativeNumber);
 }
 
-/// Refuses, before anything big is allocated, a run whose estimated peak exceeds --max-memory or
-/// what the system has available.
-void check_memory(const Mesh& mesh, const GridArgs& g, const std::string& input) {
-    if (mesh.triangles.empty()) return;  // scan_convert gives the clear message
-    const Box3d box = bounding_box(mesh);
-    const Vec3d size = box.max - box.min;
-    const double longest = std::max({size.x, size.y, size.z});
-    const double h = g.voxel_size > 0 ? g.voxel_size : longest / g.resolution;
-    if (!(h > 0) || !std::isfinite(h)) return;
-    const MemoryEstimate e = estimate_memory(mesh, h, g.smoothing ? 8.0f : g.band);
-    const double need = e.total(g.smoothing);
-    const std::size_t available = available_memory_bytes();
-    const std::size_t limit = g.max_memory.empty() ? available : parse_bytes(g.max_memory, "--max-memory");
-    if (limit > 0 && need > double(limit))
-        throw OutOfMemory(input + ": this run needs about " + format_bytes(need) + " at voxel size " +
-                          std::to_string(h) + ", more than the " + format_bytes(double(limit)) +
-                          (g.max_memory.empty() ? " available" : " allowed by --max-memory") +
-                          "; lower --resolution or raise --max-memory");
-    if (e.grid_samples / 512 > 2.0e9)
-        throw OutOfMemory(input + ": the grid would have more than 2^31 blocks; lower --resolution");
+/// Runs f; a library error that does not name the file yet gets `file: ` in front.
+template <class F>
+auto naming(const std::string& file, F&& f) {
+    const auto prefix = [&](const char* what) {
+        const std::string w(what);
+        return w.rfind(file, 0) == 0 ? w : file + ": " + w;
+    };
+    try {
+        return f();
+    } catch (const InvalidInput& e) {
+        throw InvalidInput(prefix(e.what()));
+    } catch (const OutOfMemory& e) {
+        throw OutOfMemory(prefix(e.what()));
+    }
 }
 
-/// Reads, repairs and scan-converts `input`; fills the "input" and "voxelize" parts of j.
-Volume mesh_to_volume(const std::string& input, const GridArgs& g, TerminalProgress& progress, Json& j) {
-    Stopwatch clock;
-    progress.begin("read");
-    ReadInfo info;
-    Mesh mesh = read_mesh(input, &info);
-    const double t_read = clock.lap();
+/// The "input" object: the file as read, and what the repair did (as before the library's report).
+Json input_json(const std::string& file, const ReadInfo& info, const Mesh& mesh, const PipelineReport& r) {
     Json in = Json::object();
-    in.set("file", input).set("format", info.format).set("vertices", mesh.positions.size()).set("triangles", mesh.triangles.size());
-    std::vector<std::string> repair_warnings;
-#ifdef NORMALFLOW_HAS_CGAL
-    if (g.repair) {
-        progress.begin("repair");
-        const RepairReport rr = repair_mesh(mesh);
-        in.set("points_merged", rr.points_merged).set("degenerate_removed", rr.degenerate_removed)
-            .set("duplicates_removed", rr.duplicates_removed).set("faces_reversed", rr.faces_reversed);
-        repair_warnings = rr.warnings;
-    }
-#endif
-    const double t_repair = clock.lap();
-    check_memory(mesh, g, input);
-    progress.begin("voxelize");
-    ScanConvertOptions opt;
-    opt.resolution = g.resolution;
-    opt.voxel_size = g.voxel_size;
-    opt.half_width = g.band;
-    opt.shell_thickness = g.shell;
-    opt.threads = g.threads;
-    ScanConvertReport sr;
-#ifdef NORMALFLOW_HAS_CGAL
-    const auto query = make_aabb_query(mesh);  // CGAL's AABB tree: exact closest points
-#else
-    const auto query = make_bvh_query(mesh);   // the engine's own BVH (same answers, no GPL code)
-#endif
-    Volume v = scan_convert(mesh, *query, opt, &sr, &progress);
-    const double t_voxelize = clock.lap();
-    j.set("input", in);
-    Json vox = Json::object();
-    vox.set("dims", Json::array(std::vector<int>(v.grid.dims.begin(), v.grid.dims.end())))
-        .set("voxel_size", v.grid.voxel_size).set("band_half_width", v.half_width)
-        .set("band_voxels", sr.band_voxels).set("blocks", v.block_count())
-        .set("uncertain_sign", sr.uncertain_sign).set("memory_bytes", v.memory_bytes());
-    j.set("voxelize", vox);
-    Json sec = Json::object();
-    sec.set("read", t_read).set("repair", t_repair).set("voxelize", t_voxelize);
-    j.set("seconds", sec);
-    Json warnings = Json::array(info.warnings);
-    for (const auto& w : repair_warnings) warnings.push(w);
-    for (const auto& w : sr.warnings) warnings.push(w);
-    j.set("warnings", warnings);
-    return v;
+    in.set("file", file).set("format", info.format).set("vertices", mesh.positions.size())
+        .set("triangles", mesh.triangles.size());
+    if (r.repaired)
+        in.set("points_merged", r.repair.points_merged).set("degenerate_removed", r.repair.degenerate_removed)
+            .set("duplicates_removed", r.repair.duplicates_removed).set("faces_reversed", r.repair.faces_reversed);
+    return in;
 }
 
-/// `source` names the input in messages; `smoothed` says whether the engine ran before.
-Mesh volume_to_mesh(const Volume& v, TerminalProgress& progress, Json& j, const std::string& source, bool smoothed) {
-    Stopwatch clock;
-    progress.begin("extract");
-    ExtractReport er;
-    Mesh m = extract_surface(v, {}, &er);
-    j["seconds"].set("extract", clock.seconds());
-    if (m.empty()) {
-        if (smoothed)
-            throw InvalidInput(source + ": the surface vanished during smoothing (parts thinner than a few voxels "
-                               "shrink away); raise --resolution or lower --iterations");
-        throw InvalidInput(source + ": the volume holds no surface (every sample has the same sign)");
-    }
-    return m;
+/// The pipeline report's keys, the tool's read seconds in front and the read warnings first.
+Json report_json(const char* command, const PipelineReport& r, double t_read, const ReadInfo* info) {
+    Json j = to_json(r);
+    j.set("command", command);
+    Json sec = Json::object();
+    sec.set("read", t_read).set("repair", r.seconds.repair).set("voxelize", r.seconds.voxelize);
+    if (r.smoothed) sec.set("smooth", r.seconds.smooth);
+    j.set("seconds", sec);
+    Json warnings = Json::array(info ? info->warnings : std::vector<std::string>{});
+    for (const auto& w : r.warnings) warnings.push(w);
+    j.set("warnings", warnings);
+    return j;
 }
 
 void write_result(const std::string& output, const Mesh& m, TerminalProgress& progress, Json& j,
@@ -176,11 +116,8 @@ void write_result(const std::string& output, const Mesh& m, TerminalProgress& pr
         case MeshFormat::Glb: write_draco_glb(output, m, draco); break;  // KHR_draco_mesh_compression
         default: write_mesh(output, m);
     }
-    const MeshReport r = mesh_report(m);
-    Json out = Json::object();
-    out.set("file", output).set("vertices", m.positions.size()).set("triangles", m.triangles.size())
-        .set("components", r.components).set("closed", r.closed).set("manifold", r.manifold)
-        .set("area", r.area).set("volume", r.volume);
+    Json out = to_json(mesh_report(m));
+    out.set("file", output).set("vertices", m.positions.size());
     j.set("output", out);
     j["seconds"].set("write", clock.seconds());
 }
@@ -197,10 +134,19 @@ int run_voxelize(const VoxelizeArgs& a) {
     TerminalProgress progress(a.out);
     if (!is_volume_path(a.output))
         throw InvalidInput("voxelize: " + a.output + ": the output must be a .vdb or .nrrd file");
-    Json j = Json::object();
-    j.set("command", "voxelize");
-    Volume v = mesh_to_volume(a.input, a.grid, progress, j);
+    PipelineOptions opt = a.pipeline;
+    opt.smoothing = false;
+    progress.begin("read");
     Stopwatch clock;
+    ReadInfo info;
+    const Mesh mesh = read_mesh(a.input, &info);
+    const double t_read = clock.lap();
+    PipelineReport r;
+    const Volume v = naming(a.input, [&] { return mesh_to_volume(mesh, opt, &r, &progress); });
+    Json j = report_json("voxelize", r, t_read, &info);
+    j.set("input", input_json(a.input, info, mesh, r));
+    j["voxelize"].set("band_half_width", v.half_width).set("memory_bytes", v.memory_bytes());
+    clock.lap();
     progress.begin("write");
     write_volume(a.output, v);
     j["seconds"].set("write", clock.seconds());
@@ -214,13 +160,18 @@ int run_voxelize(const VoxelizeArgs& a) {
 int run_extract(const ExtractArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
-    Json j = Json::object();
-    j.set("command", "extract").set("seconds", Json::object());
     progress.begin("read");
     Stopwatch clock;
     const Volume v = read_volume(a.input);
-    j["seconds"].set("read", clock.seconds());
-    const Mesh m = volume_to_mesh(v, progress, j, a.input, false);
+    const double t_read = clock.seconds();
+    PipelineOptions opt;
+    opt.smoothing = false;
+    PipelineReport r;
+    const Mesh m = naming(a.input, [&] { return volume_to_mesh(v, opt, &r, &progress); });
+    Json j = Json::object();
+    j.set("command", "extract").set("extract", to_json(r.extract));
+    j.set("seconds", Json::object().set("read", t_read).set("extract", r.seconds.extract));
+    j.set("warnings", Json::array(r.warnings));
     write_result(a.output, m, progress, j);
     finish(j, a.out, total, progress);
     progress.note("extract: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles)");
@@ -230,63 +181,29 @@ int run_extract(const ExtractArgs& a) {
 int run_smooth(const SmoothArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
-    SmoothOptions opt;
-    if (a.mode == "isotropic") opt.mode = SmoothMode::Isotropic;
-    else if (a.mode == "anisotropic") opt.mode = SmoothMode::Anisotropic;
-    else if (a.mode == "highboost") opt.mode = SmoothMode::HighBoost;
-    else if (a.mode == "mcf") opt.mode = SmoothMode::MeanCurvature;
-    else throw InvalidInput("smooth: unknown --mode '" + a.mode + "' (isotropic, anisotropic, highboost, mcf)");
-    opt.iterations = a.iterations;
-    opt.normal_steps = a.normal_steps;
-    opt.mu = a.mu;
-    opt.alpha = a.alpha;
-    opt.threads = a.grid.threads;
-    if (a.presmooth >= 0) opt.conductance_presmooth_steps = a.presmooth;
-    opt.mu_robust = a.mu_robust;
-    opt.second_order_term = a.second_order;
+    PipelineOptions opt = a.pipeline;
+    opt.smoothing = true;
+    opt.smooth.threads = opt.scan.threads;  // --threads sets both stages
+    validate(opt);
     // Fail on a bad output path before the long computation.
     if (mesh_format_from_path(a.output) == MeshFormat::Unknown)
         throw InvalidInput("smooth: " + a.output + ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc)");
-
-    Json j = Json::object();
-    j.set("command", "smooth").set("mode", a.mode);
-    GridArgs g = a.grid;
-    g.smoothing = true;
-    g.band = std::max(g.band, 3.0f);  // the engine rebuilds an 8-voxel band itself
-    Volume v = mesh_to_volume(a.input, g, progress, j);
+    progress.begin("read");
     Stopwatch clock;
-    const SmoothReport sr = smooth_volume(v, opt, &progress);
-    j["seconds"].set("smooth", clock.seconds());
-    Json s = Json::object();
-    s.set("iterations", sr.iterations).set("seconds_per_iteration", Json::array(sr.seconds_per_iteration))
-        .set("band_voxels", Json::array(sr.band_voxels)).set("normal_energy", Json::array(sr.normal_energy))
-        .set("refit_energy", Json::array(sr.refit_energy));
-    if (!sr.mu.empty()) s.set("mu", Json::array(sr.mu));
-    s.set("stopped_unchanged", sr.stopped_unchanged);
-    if (sr.stopped_unchanged)
-        progress.note("smooth: stopped after main iteration " + std::to_string(sr.iterations) + " of " +
-                      std::to_string(opt.iterations > 0 ? opt.iterations : default_iterations(opt.mode)) +
+    ReadInfo info;
+    const Mesh mesh = read_mesh(a.input, &info);
+    const double t_read = clock.lap();
+    PipelineReport r;
+    const Mesh m = naming(a.input, [&] { return smooth_mesh(mesh, opt, &r, &progress); });
+    Json j = report_json("smooth", r, t_read, &info);
+    j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
+    j["seconds"].set("extract", r.seconds.extract);
+    if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
+    if (r.smooth.stopped_unchanged)
+        progress.note("smooth: stopped after main iteration " + std::to_string(r.smooth.iterations) + " of " +
+                      std::to_string(opt.smooth.iterations > 0 ? opt.smooth.iterations
+                                                               : default_iterations(opt.smooth.mode)) +
                       ": its refit kept no step, so the surface no longer changes");
-    j.set("smooth", s);
-    for (const auto& w : sr.warnings) j["warnings"].push(w);
-    Mesh m = volume_to_mesh(v, progress, j, a.input, true);
-    if (a.target_faces > 0) {
-#ifdef NORMALFLOW_HAS_CGAL
-        progress.begin("decimate");
-        cgal::CleanupOptions co;
-        co.reduction = cgal::CleanupReduction::FaceCount;
-        co.target_faces = a.target_faces;
-        const cgal::CleanupReport cr = cgal::cleanup_mesh(m, co);
-        j.set("decimate", Json::object()
-                              .set("faces_before", cr.faces_before)
-                              .set("faces_after", cr.faces_after)
-                              .set("hausdorff", cr.hausdorff)
-                              .set("seconds", cr.seconds));
-        for (const auto& w : cr.warnings) j["warnings"].push(w);
-#else
-        throw InvalidInput("smooth: --target-faces needs a build with CGAL");
-#endif
-    }
     write_result(a.output, m, progress, j, a.draco);
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles, " +
@@ -301,8 +218,9 @@ void add_voxelize_command(CLI::App& app) {
     auto* cmd = app.add_subcommand("voxelize", "scan-convert a mesh into a narrow-band signed distance volume");
     cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
     cmd->add_option("OUT", a->output, "volume file (.vdb or .nrrd)")->required();
-    add_grid_options(cmd, a->grid);
-    cmd->add_option("--band", a->grid.band, "band half-width in voxels")->check(CLI::Range(1.0, 64.0));
+    add_grid_options(cmd, a->pipeline);
+    cmd->add_option("--band", a->pipeline.scan.half_width, "band half-width in voxels")
+        ->check(CLI::Range(1.0, 64.0))->capture_default_str();
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_voxelize);
 }
@@ -318,28 +236,33 @@ void add_extract_command(CLI::App& app) {
 
 void add_smooth_command(CLI::App& app) {
     auto a = std::make_shared<SmoothArgs>();
+    SmoothOptions& s = a->pipeline.smooth;
     auto* cmd = app.add_subcommand("smooth", "voxelize, filter the normal map and refit, extract (the whole pipeline)");
     cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
     cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
-    add_grid_options(cmd, a->grid);
-    cmd->add_option("--mode", a->mode, "isotropic | anisotropic | highboost | mcf")
-        ->check(CLI::IsMember({"isotropic", "anisotropic", "highboost", "mcf"}));
-    cmd->add_option("--iterations", a->iterations,
+    add_grid_options(cmd, a->pipeline);
+    std::map<std::string, SmoothMode> modes;
+    for (SmoothMode m : {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature})
+        modes[to_string(m)] = m;
+    add_enum_option(cmd, "--mode", s.mode, modes, "isotropic | anisotropic | highboost | mcf");
+    cmd->add_option("--iterations", s.iterations,
                     "main iterations (normal loop + refit); default: " +
                         std::to_string(default_iterations(SmoothMode::Anisotropic)) + " for anisotropic, " +
                         std::to_string(default_iterations(SmoothMode::Isotropic)) + " for the other modes")
         ->check(CLI::Range(1, 10000));
-    cmd->add_option("--normal-steps", a->normal_steps, "normal-loop steps per main iteration")->check(CLI::Range(1, 10000));
-    cmd->add_option("--mu", a->mu, "anisotropic conductance scale, 1/voxel")->check(CLI::PositiveNumber);
-    cmd->add_option("--alpha", a->alpha, "high-boost amount")->check(CLI::NonNegativeNumber);
-    cmd->add_option("--presmooth", a->presmooth,
+    cmd->add_option("--normal-steps", s.normal_steps, "normal-loop steps per main iteration")
+        ->check(CLI::Range(1, 10000))->capture_default_str();
+    cmd->add_option("--mu", s.mu, "anisotropic conductance scale, 1/voxel")->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--alpha", s.alpha, "high-boost amount")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--presmooth", s.conductance_presmooth_steps,
                     "anisotropic: isotropic steps that regularise the conductance (0: the paper's raw g)")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_option("--mu-robust", a->mu_robust,
+        ->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--mu-robust", s.mu_robust,
                     "anisotropic: raise mu to C times the robust noise scale of the curvature (0: the fixed mu)")
-        ->check(CLI::NonNegativeNumber);
-    cmd->add_flag("--second-order", a->second_order, "add Appendix A's second term (Eq. 39) to the refit");
-    cmd->add_option("--target-faces", a->target_faces, "decimate the result to at most N faces (CGAL edge collapse)")
+        ->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_flag("--second-order", s.second_order_term, "add Appendix A's second term (Eq. 39) to the refit");
+    cmd->add_option("--target-faces", a->pipeline.target_faces,
+                    "decimate the result to at most N faces (CGAL edge collapse)")
         ->check(CLI::Range(std::size_t(4), std::size_t(1) << 40));
     add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);

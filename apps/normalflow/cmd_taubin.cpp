@@ -1,40 +1,31 @@
 // normalflow taubin / laplacian / bilateral: the mesh-side smoothing baselines (io/openmesh/smoothing.h).
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 
 #include "commands.h"
 #include "core/errors.h"
 #include "io/io.h"
-#ifdef NORMALFLOW_HAS_OPENMESH
-#include "io/openmesh/smoothing.h"
-#endif
+#include "io/openmesh/smoothing.h"  // plain option and report structs; the code needs OpenMesh
 
 namespace normalflow::cli {
 
 namespace {
 
+/// Flags parse straight into the library's option structs (io/openmesh/smoothing.h), whose defaults
+/// the help shows.
 struct BaselineArgs {
     std::string input, output;
-    double lambda = 0.5;            ///< taubin/laplacian step factor
-    double mu = -0.53;              ///< taubin inflating factor
-    int iterations = 10;            ///< taubin: λ|μ pairs; laplacian: steps; bilateral: normal passes
-    std::string weights = "uniform";  ///< uniform | cotan
-    int vertex_iterations = 10;     ///< bilateral vertex-update passes
-    double sigma_spatial = 0.0;     ///< bilateral σ_s, world units (0: mean centroid distance)
-    double sigma_range = 0.35;      ///< bilateral σ_r
-    bool move_boundary = false;     ///< let open-boundary vertices move
+    TaubinOptions taubin;
+    LaplacianOptions laplacian;
+    BilateralNormalOptions bilateral;
     std::string command;            ///< taubin | laplacian | bilateral
     OutputFlags out;
 };
 
-#ifdef NORMALFLOW_HAS_OPENMESH
-LaplacianWeights parse_weights(const std::string& s) {
-    if (s == "uniform") return LaplacianWeights::Uniform;
-    if (s == "cotan") return LaplacianWeights::Cotan;
-    throw InvalidInput("--weights " + s + ": expected uniform or cotan");
-}
-#endif
+const std::map<std::string, LaplacianWeights> kWeights = {{"uniform", LaplacianWeights::Uniform},
+                                                          {"cotan", LaplacianWeights::Cotan}};
 
 int run_baseline(const BaselineArgs& a) {
 #ifndef NORMALFLOW_HAS_OPENMESH
@@ -46,30 +37,12 @@ int run_baseline(const BaselineArgs& a) {
     Mesh mesh = read_mesh(a.input);
     const double t_read = clock.lap();
     SmoothingReport r;
-    if (a.command == "taubin") {
-        TaubinOptions o;
-        o.lambda = a.lambda;
-        o.mu = a.mu;
-        o.iterations = a.iterations;
-        o.weights = parse_weights(a.weights);
-        o.fix_boundary = !a.move_boundary;
-        r = taubin_smooth(mesh, o, &progress);
-    } else if (a.command == "laplacian") {
-        LaplacianOptions o;
-        o.lambda = a.lambda;
-        o.iterations = a.iterations;
-        o.weights = parse_weights(a.weights);
-        o.fix_boundary = !a.move_boundary;
-        r = laplacian_smooth(mesh, o, &progress);
-    } else {
-        BilateralNormalOptions o;
-        o.normal_iterations = a.iterations;
-        o.vertex_iterations = a.vertex_iterations;
-        o.sigma_spatial = a.sigma_spatial;
-        o.sigma_range = a.sigma_range;
-        o.fix_boundary = !a.move_boundary;
-        r = bilateral_normal_filter(mesh, o, &progress);
-    }
+    if (a.command == "taubin")
+        r = taubin_smooth(mesh, a.taubin, &progress);
+    else if (a.command == "laplacian")
+        r = laplacian_smooth(mesh, a.laplacian, &progress);
+    else
+        r = bilateral_normal_filter(mesh, a.bilateral, &progress);
     const double t_smooth = clock.lap();
     write_mesh(a.output, mesh);
     const double t_write = clock.lap();
@@ -94,12 +67,13 @@ int run_baseline(const BaselineArgs& a) {
 #endif
 }
 
-CLI::App* add_common(CLI::App& app, const char* name, const char* help, std::shared_ptr<BaselineArgs> args) {
+CLI::App* add_common(CLI::App& app, const char* name, const char* help, std::shared_ptr<BaselineArgs> args,
+                     bool& fix_boundary) {
     args->command = name;
     auto* cmd = app.add_subcommand(name, help);
     cmd->add_option("IN", args->input, "input mesh")->required();
     cmd->add_option("OUT", args->output, "output mesh (format from the extension)")->required();
-    cmd->add_flag("--move-boundary", args->move_boundary, "let vertices on open boundaries move");
+    cmd->add_flag("!--move-boundary", fix_boundary, "let vertices on open boundaries move");
     add_output_flags(cmd, args->out);
     return cmd;
 }
@@ -108,32 +82,39 @@ CLI::App* add_common(CLI::App& app, const char* name, const char* help, std::sha
 
 void add_taubin_command(CLI::App& app) {
     auto args = std::make_shared<BaselineArgs>();
-    auto* cmd = add_common(app, "taubin", "Taubin lambda|mu smoothing of the mesh (Taubin 1995), baseline", args);
-    cmd->add_option("--lambda", args->lambda, "shrinking factor, (0, 1]")->capture_default_str();
-    cmd->add_option("--mu", args->mu, "inflating factor, -1.5 <= mu <= -lambda")->capture_default_str();
-    cmd->add_option("--iterations", args->iterations, "lambda|mu pairs")->check(CLI::NonNegativeNumber)->capture_default_str();
-    cmd->add_option("--weights", args->weights, "uniform or cotan")->check(CLI::IsMember({"uniform", "cotan"}))->capture_default_str();
+    TaubinOptions& o = args->taubin;
+    auto* cmd = add_common(app, "taubin", "Taubin lambda|mu smoothing of the mesh (Taubin 1995), baseline", args,
+                           o.fix_boundary);
+    cmd->add_option("--lambda", o.lambda, "shrinking factor, (0, 1]")->capture_default_str();
+    cmd->add_option("--mu", o.mu, "inflating factor, -1.5 <= mu <= -lambda")->capture_default_str();
+    cmd->add_option("--iterations", o.iterations, "lambda|mu pairs")->check(CLI::NonNegativeNumber)->capture_default_str();
+    add_enum_option(cmd, "--weights", o.weights, kWeights, "uniform or cotan");
     on_run(cmd, args, run_baseline);
 }
 
 void add_laplacian_command(CLI::App& app) {
     auto args = std::make_shared<BaselineArgs>();
-    auto* cmd = add_common(app, "laplacian", "plain Laplacian smoothing of the mesh (shrinks), baseline", args);
-    cmd->add_option("--lambda", args->lambda, "step factor, (0, 1]")->capture_default_str();
-    cmd->add_option("--iterations", args->iterations, "steps")->check(CLI::NonNegativeNumber)->capture_default_str();
-    cmd->add_option("--weights", args->weights, "uniform or cotan")->check(CLI::IsMember({"uniform", "cotan"}))->capture_default_str();
+    LaplacianOptions& o = args->laplacian;
+    auto* cmd = add_common(app, "laplacian", "plain Laplacian smoothing of the mesh (shrinks), baseline", args,
+                           o.fix_boundary);
+    cmd->add_option("--lambda", o.lambda, "step factor, (0, 1]")->capture_default_str();
+    cmd->add_option("--iterations", o.iterations, "steps")->check(CLI::NonNegativeNumber)->capture_default_str();
+    add_enum_option(cmd, "--weights", o.weights, kWeights, "uniform or cotan");
     on_run(cmd, args, run_baseline);
 }
 
 void add_bilateral_command(CLI::App& app) {
     auto args = std::make_shared<BaselineArgs>();
-    args->iterations = 20;
-    auto* cmd = add_common(app, "bilateral", "bilateral normal filtering (Zheng et al. 2011), baseline", args);
-    cmd->add_option("--iterations", args->iterations, "normal filtering passes")->check(CLI::NonNegativeNumber)->capture_default_str();
-    cmd->add_option("--vertex-iterations", args->vertex_iterations, "vertex update passes")->check(CLI::NonNegativeNumber)->capture_default_str();
-    cmd->add_option("--sigma-spatial", args->sigma_spatial, "spatial Gaussian width, world units (0: mean centroid distance)")
+    BilateralNormalOptions& o = args->bilateral;
+    auto* cmd = add_common(app, "bilateral", "bilateral normal filtering (Zheng et al. 2011), baseline", args,
+                           o.fix_boundary);
+    cmd->add_option("--iterations", o.normal_iterations, "normal filtering passes")
         ->check(CLI::NonNegativeNumber)->capture_default_str();
-    cmd->add_option("--sigma-range", args->sigma_range, "normal-difference Gaussian width, (0, 2]")->capture_default_str();
+    cmd->add_option("--vertex-iterations", o.vertex_iterations, "vertex update passes")
+        ->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--sigma-spatial", o.sigma_spatial, "spatial Gaussian width, world units (0: mean centroid distance)")
+        ->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--sigma-range", o.sigma_range, "normal-difference Gaussian width, (0, 2]")->capture_default_str();
     on_run(cmd, args, run_baseline);
 }
 

@@ -1,41 +1,33 @@
 // normalflow tetmesh IN OUT.(mesh|vtu|node) [--quality 1.414] [--min-dihedral 10] [--optimize 2] [--max-volume V]
 //                   [--surface auto|keep|split]
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <string>
 
 #include "commands.h"
 #include "core/errors.h"
 #include "io/io.h"
-#ifdef NORMALFLOW_HAS_TETGEN
-#include "io/tetgen/tetmesh.h"
-#endif
+#include "io/tetgen/tetmesh.h"  // plain option and report structs; the code needs TetGen
 
 namespace normalflow::cli {
 namespace {
 
 struct TetmeshArgs {
     std::string input, output;
-    double quality = 1.414, max_volume = 0.0;
-    double min_dihedral = 10.0;  // TetmeshOptions defaults (the header is absent in builds without TetGen)
-    int optimize = 2;
-    std::string surface = "auto";  // TetmeshOptions::Surface
+    TetmeshOptions tetmesh;  ///< the flags parse straight into it
     OutputFlags out;
 };
+
+const std::map<std::string, TetmeshOptions::Surface> kSurfaces = {{"auto", TetmeshOptions::Surface::Auto},
+                                                                  {"keep", TetmeshOptions::Surface::Keep},
+                                                                  {"split", TetmeshOptions::Surface::Split}};
 
 int run_tetmesh(const TetmeshArgs& a) {
 #ifdef NORMALFLOW_HAS_TETGEN
     const Mesh m = read_mesh(a.input);
-    TetmeshOptions o;
-    o.radius_edge = a.quality;
-    o.max_volume = a.max_volume;
-    o.min_dihedral_deg = a.min_dihedral;
-    o.optimize_level = a.optimize;
-    o.surface = a.surface == "keep"    ? TetmeshOptions::Surface::Keep
-                : a.surface == "split" ? TetmeshOptions::Surface::Split
-                                       : TetmeshOptions::Surface::Auto;
     TetmeshReport r;
-    const TetMesh t = tetrahedralize(m, o, &r);
+    const TetMesh t = tetrahedralize(m, a.tetmesh, &r);
     write_tetmesh(a.output, t);
     if (a.out.json) {
         Json j = Json::object();
@@ -64,20 +56,19 @@ void add_tetmesh_command(CLI::App& app) {
     auto* cmd = app.add_subcommand("tetmesh", "tetrahedralize a closed surface with TetGen (AGPL-3.0)");
     cmd->add_option("IN", a->input, "closed, manifold, self-intersection-free surface")->required();
     cmd->add_option("OUT", a->output, "output .mesh (Medit), .vtu (VTK) or .node (+ .ele)")->required();
-    cmd->add_option("--quality", a->quality, "radius-edge ratio bound (>= 1)")->capture_default_str();
-    cmd->add_option("--min-dihedral", a->min_dihedral,
+    TetmeshOptions& o = a->tetmesh;
+    cmd->add_option("--quality", o.radius_edge, "radius-edge ratio bound (>= 1)")->capture_default_str();
+    cmd->add_option("--min-dihedral", o.min_dihedral_deg,
                     "smallest dihedral angle TetGen aims for, degrees (0 = none; tried, not guaranteed)")
         ->check(CLI::Range(0.0, 69.999))
         ->capture_default_str();
-    cmd->add_option("--optimize", a->optimize, "TetGen mesh optimisation level 0..10")
+    cmd->add_option("--optimize", o.optimize_level, "TetGen mesh optimisation level 0..10")
         ->check(CLI::Range(0, 10))
         ->capture_default_str();
-    cmd->add_option("--max-volume", a->max_volume, "largest tetrahedron volume, world units^3 (0 = none)");
-    cmd->add_option("--surface", a->surface,
+    cmd->add_option("--max-volume", o.max_volume, "largest tetrahedron volume, world units^3 (0 = none)");
+    add_enum_option(cmd, "--surface", o.surface, kSurfaces,
                     "keep: the input triangles are the boundary faces (TetGen -Y); split: TetGen may split them "
-                    "to meet the bounds; auto: keep, or split with --max-volume")
-        ->check(CLI::IsMember({"auto", "keep", "split"}))
-        ->capture_default_str();
+                    "to meet the bounds; auto: keep, or split with --max-volume");
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_tetmesh);
 }

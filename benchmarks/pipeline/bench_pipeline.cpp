@@ -1,7 +1,8 @@
-// nf_bench_pipeline: end-to-end scan conversion benchmark (issue 3).
+// nf_bench_pipeline: end-to-end scan conversion benchmark (issue 3), through the shipped pipeline
+// (io/pipeline smooth_mesh with smoothing off: repair, scan conversion, extraction).
 //   nf_bench_pipeline [mesh] [target_triangles] [resolution] [--no-sweep]
-// 1. Subdivides a mesh (1-to-4 midpoint) to about target_triangles (default 1M), voxelizes it at
-//    the resolution (default 512) and extracts it again: time per stage, band voxels, peak memory.
+// 1. Subdivides a mesh (1-to-4 midpoint) to about target_triangles (default 1M), repairs and voxelizes
+//    it at the resolution (default 512) and extracts it again: time per stage, band voxels, peak memory.
 // 2. The same model (not subdivided) at resolutions 128, 256, 512, 1024: band voxels, volume bytes
 //    and their ratio per doubling (about 4 for a sparse band, 8 for a dense grid).
 // Prints Markdown tables. Peak memory is the process's maximum resident set (getrusage), so the
@@ -17,10 +18,8 @@
 #include <utility>
 
 #include "core/mesh.h"
-#include "extract/extract_surface.h"
 #include "io/io.h"
-#include "sdf/closest_triangle.h"
-#include "sdf/scan_convert.h"
+#include "io/pipeline/pipeline.h"
 
 using namespace normalflow;
 
@@ -71,50 +70,44 @@ int main(int argc, char** argv) {
 
         std::printf("## End to end: %s subdivided to %zu triangles, resolution %d\n\n", path.c_str(),
                     m.triangles.size(), res);
-        t0 = now();
-        const auto q = make_bvh_query(m);
-        const double t_bvh = now() - t0;
-        ScanConvertOptions o;
-        o.resolution = res;
-        ScanConvertReport rep;
-        t0 = now();
-        const Volume v = scan_convert(m, *q, o, &rep);
-        const double t_scan = now() - t0;
-        t0 = now();
-        ExtractReport er;
-        const Mesh out = extract_surface(v, {}, &er);
-        const double t_ext = now() - t0;
+        // The shipped pipeline (smooth_mesh without the smoothing stage): repair, scan conversion
+        // with the default distance query, extraction.
+        PipelineOptions po;
+        po.smoothing = false;
+        po.scan.resolution = res;
+        PipelineReport rep;
+        const Mesh out = smooth_mesh(m, po, &rep);
+        const ScanConvertReport& sr = rep.scan;
         std::printf("| stage | seconds |\n|---|---|\n");
         std::printf("| subdivide (not counted) | %.2f |\n", t_sub);
-        std::printf("| closest-point BVH build | %.2f |\n", t_bvh);
-        std::printf("| scan_convert: candidates + distances + block signs | %.2f |\n", rep.seconds_distance);
-        std::printf("| scan_convert: winding-number tree + tile signs | %.2f |\n", rep.seconds_sign);
-        std::printf("| scan_convert total | %.2f |\n", t_scan);
-        std::printf("| extract_surface | %.2f |\n", t_ext);
-        std::printf("| **end to end (BVH + scan + extract)** | **%.2f** |\n\n", t_bvh + t_scan + t_ext);
+        std::printf("| repair | %.2f |\n", rep.seconds.repair);
+        std::printf("| scan_convert: candidates + distances + block signs | %.2f |\n", sr.seconds_distance);
+        std::printf("| scan_convert: winding-number tree + tile signs | %.2f |\n", sr.seconds_sign);
+        std::printf("| voxelize total (memory check, %s query build, scan_convert) | %.2f |\n", to_string(rep.distance),
+                    rep.seconds.voxelize);
+        std::printf("| extract_surface | %.2f |\n", rep.seconds.extract);
+        std::printf("| **end to end (repair + voxelize + extract)** | **%.2f** |\n\n", rep.seconds.total);
         std::printf("grid %d x %d x %d, h = %.4g; band voxels %zu; blocks %zu (of %zu candidates); winding evaluations %zu; "
                     "uncertain signs %zu; volume %.1f MiB; output %zu vertices, %zu triangles; peak RSS %.0f MiB\n\n",
-                    v.grid.dims[0], v.grid.dims[1], v.grid.dims[2], v.grid.voxel_size, rep.band_voxels, rep.blocks, rep.candidate_blocks,
-                    rep.winding_evaluations, rep.uncertain_sign, double(rep.memory_bytes) / 1048576.0, er.vertices,
-                    er.triangles, peak_mib());
+                    sr.grid.dims[0], sr.grid.dims[1], sr.grid.dims[2], sr.grid.voxel_size, sr.band_voxels, sr.blocks,
+                    sr.candidate_blocks, sr.winding_evaluations, sr.uncertain_sign, double(sr.memory_bytes) / 1048576.0,
+                    rep.extract.vertices, rep.extract.triangles, peak_mib());
+        (void)out;
 
         if (!sweep) return 0;
         std::printf("## Resolution sweep: %s (%zu triangles)\n\n", path.c_str(), base.triangles.size());
-        std::printf("| resolution | band voxels | ratio | volume MiB | ratio | dense grid MiB | scan s | extract s | peak RSS MiB |\n");
+        std::printf("| resolution | band voxels | ratio | volume MiB | ratio | dense grid MiB | voxelize s | extract s | peak RSS MiB |\n");
         std::printf("|---|---|---|---|---|---|---|---|---|\n");
-        const auto qb = make_bvh_query(base);
         std::size_t prev_band = 0, prev_mem = 0;
         for (int r : {128, 256, 512, 1024}) {
-            ScanConvertOptions ob;
-            ob.resolution = r;
-            ScanConvertReport rb;
-            t0 = now();
-            const Volume vb = scan_convert(base, *qb, ob, &rb);
-            const double ts = now() - t0;
-            t0 = now();
-            const Mesh eb = extract_surface(vb);
-            const double te = now() - t0;
-            const double dense = double(vb.grid.sample_count()) * 4.0 / 1048576.0;
+            PipelineOptions ob;
+            ob.smoothing = false;
+            ob.scan.resolution = r;
+            PipelineReport pb;
+            const Mesh eb = smooth_mesh(base, ob, &pb);
+            const ScanConvertReport& rb = pb.scan;
+            const double ts = pb.seconds.voxelize, te = pb.seconds.extract;
+            const double dense = double(rb.grid.sample_count()) * 4.0 / 1048576.0;
             if (prev_band)
                 std::printf("| %d | %zu | %.2f | %.1f | %.2f | %.0f | %.2f | %.2f | %.0f |\n", r, rb.band_voxels,
                             double(rb.band_voxels) / double(prev_band), double(rb.memory_bytes) / 1048576.0,

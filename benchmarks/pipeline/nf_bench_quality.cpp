@@ -1,8 +1,8 @@
 // nf_bench_quality: quality of the normal-map engine on real noisy / ground-truth pairs.
 //
-// For every pair NAME_<noise>.ply / NAME_gt.ply in shared/data/pairs_gnf and pairs_gcn: scan-convert
-// the noisy mesh (resolution R along the longest side), smooth it isotropically and anisotropically
-// (smooth_volume), extract the surface, and report the distance and the mean normal-angle error to
+// For every pair NAME_<noise>.ply / NAME_gt.ply in shared/data/pairs_gnf and pairs_gcn: run the
+// shipped pipeline (io/pipeline smooth_mesh: repair, scan conversion at resolution R along the
+// longest side, isotropic and anisotropic smoothing, extraction) on the noisy mesh, and report the distance and the mean normal-angle error to
 // the ground truth (surface_distance: points sampled uniformly by area on the result, angle between
 // the result's face normal there and the ground truth's face normal at the closest point), next to
 // the noisy input. Distances are in voxels of the grid (h = longest side / R).
@@ -14,7 +14,6 @@
 // Prints one table row per pair and mode on stdout (and, with --out DIR, writes the meshes there).
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -23,12 +22,9 @@
 #include <vector>
 
 #include "core/mesh.h"
-#include "extract/extract_surface.h"
 #include "io/io.h"
+#include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
-#include "normals/smooth.h"
-#include "sdf/scan_convert.h"
-#include "sdf/triangle_bvh.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -59,10 +55,6 @@ std::vector<Pair> find_pairs(const fs::path& data) {
         }
     }
     return pairs;
-}
-
-double seconds(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -127,14 +119,16 @@ int main(int argc, char** argv) {
         try {
             const Mesh noisy = read_mesh(p.noisy.string());
             const Mesh truth = read_mesh(p.truth.string());
-            ScanConvertOptions so;
-            so.resolution = resolution;
-            so.half_width = 3.0f;
-            so.threads = base.threads;
-            auto t0 = std::chrono::steady_clock::now();
-            const Volume v = scan_convert(noisy, *make_bvh_query(noisy), so);
-            const double t_vox = seconds(t0);
-            const double h = v.grid.voxel_size;
+            // The shipped pipeline (io/pipeline smooth_mesh): repair, scan conversion with the default
+            // distance query and the band rule, smoothing, extraction.
+            PipelineOptions po;
+            po.scan.resolution = resolution;
+            po.scan.threads = base.threads;
+            po.smooth = base;
+            PipelineReport pv;
+            (void)mesh_to_volume(noisy, po, &pv);
+            const double t_vox = pv.seconds.repair + pv.seconds.voxelize;
+            const double h = pv.scan.grid.voxel_size;
             auto row = [&](const char* what, const Mesh& m, double secs) {
                 const SurfaceDistance d = surface_distance(m, truth, sampling);
                 std::printf("%-28s %-11s %10.4f %10.4f %10.3f %9.2f %9.2f\n", p.name.c_str(), what, d.mean / h,
@@ -143,19 +137,19 @@ int main(int argc, char** argv) {
             };
             row("noisy", noisy, t_vox);
             if (selected("floor")) {  // the ground truth through scan conversion and extraction only
-                const Volume g = scan_convert(truth, *make_bvh_query(truth), so);
-                row("gt-voxel", extract_surface(g), 0.0);
+                PipelineOptions pf = po;
+                pf.smoothing = false;
+                row("gt-voxel", smooth_mesh(truth, pf), 0.0);
             }
             for (const auto& [key, mode] : {std::pair{"iso", SmoothMode::Isotropic},
                                              std::pair{"aniso", SmoothMode::Anisotropic}}) {
                 if (!selected(key)) continue;
-                Volume w = v;
-                SmoothOptions o = base;
-                o.mode = mode;
-                t0 = std::chrono::steady_clock::now();
-                const SmoothReport rep = smooth_volume(w, o);
-                const Mesh m = extract_surface(w);
-                const double secs = seconds(t0);
+                PipelineOptions pm = po;
+                pm.smooth.mode = mode;
+                PipelineReport pr;
+                const Mesh m = smooth_mesh(noisy, pm, &pr);
+                const double secs = pr.seconds.smooth + pr.seconds.extract;
+                const SmoothReport& rep = pr.smooth;
                 row(to_string(mode), m, secs);
                 if (!out.empty()) {
                     fs::create_directories(out);

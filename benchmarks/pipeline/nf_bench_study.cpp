@@ -6,8 +6,8 @@
 //   - Taubin λ|μ at its best iteration count (K from 1 to 200, the K with the lowest mean distance to
 //     the ground truth: an oracle choice in Taubin's favour);
 //   - plain Laplacian (10 steps, to show shrinkage) and bilateral normal filtering (defaults);
-//   - normalflow isotropic and anisotropic (scan conversion at resolution R + smooth_volume with the
-//     defaults + extraction; the time includes all three);
+//   - normalflow isotropic and anisotropic (smooth_mesh, the shipped pipeline: repair, scan conversion
+//     at resolution R, smooth_volume with the defaults, extraction; the time includes all of them);
 //   - the published result of the method the pair comes from, where the folder has one
 //     (X.nllr_result.ply: Li et al. 2018, NLLR; X.gcn_result.ply: Shen et al. 2022, GCN-Denoiser).
 // Metrics (compare_meshes, no vertex correspondence): mean / RMS / Hausdorff distance relative to the
@@ -28,12 +28,9 @@
 
 #include "io/formats/atomic_file.h"
 #include "io/io.h"
-#include "extract/extract_surface.h"
 #include "io/openmesh/smoothing.h"
+#include "io/pipeline/pipeline.h"
 #include "metrics/compare.h"
-#include "normals/smooth.h"
-#include "sdf/closest_triangle.h"
-#include "sdf/scan_convert.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -127,17 +124,15 @@ std::vector<Pair> find_pairs(const fs::path& data) {
     return pairs;
 }
 
-/// normalflow's whole pipeline on m: scan conversion at `resolution`, smooth_volume, extraction.
+/// normalflow's whole pipeline on m, as the tool ships it (io/pipeline smooth_mesh: repair, scan
+/// conversion at `resolution`, smooth_volume with the defaults, extraction).
 Mesh normalflow_smooth(const Mesh& m, int resolution, SmoothMode mode, int threads) {
-    ScanConvertOptions so;
-    so.resolution = resolution;
-    so.threads = threads;
-    Volume v = scan_convert(m, *make_bvh_query(m), so);
-    SmoothOptions o;
-    o.mode = mode;
-    o.threads = threads;
-    smooth_volume(v, o);
-    return extract_surface(v);
+    PipelineOptions o;
+    o.scan.resolution = resolution;
+    o.scan.threads = threads;
+    o.smooth.mode = mode;
+    o.smooth.threads = threads;
+    return smooth_mesh(m, o);
 }
 
 double now_ms() {

@@ -1,0 +1,208 @@
+#include "io/pipeline/pipeline.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <type_traits>
+
+#include "core/errors.h"
+#include "sdf/closest_triangle.h"
+#include "sdf/memory_estimate.h"
+#ifdef NORMALFLOW_HAS_CGAL
+#include "io/cgal/aabb_distance.h"
+#endif
+
+namespace normalflow {
+
+namespace {
+
+class Stopwatch {
+public:
+    double lap() {
+        const auto t = std::chrono::steady_clock::now();
+        const double s = std::chrono::duration<double>(t - t0_).count();
+        t0_ = t;
+        return s;
+    }
+
+private:
+    std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+};
+
+[[noreturn]] void bad_option(const std::string& field, const std::string& value, const char* expected) {
+    throw InvalidInput("smooth_mesh: " + field + " = " + value + ": expected " + expected);
+}
+
+template <class T>
+std::string str(T v) {
+    if constexpr (std::is_floating_point_v<T>) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%g", double(v));
+        return buf;
+    } else {
+        return std::to_string(v);
+    }
+}
+
+void append(std::vector<std::string>& to, const std::vector<std::string>& from) {
+    to.insert(to.end(), from.begin(), from.end());
+}
+
+}  // namespace
+
+const char* to_string(DistanceQuery q) {
+    switch (q) {
+        case DistanceQuery::EngineBvh: return "bvh";
+        case DistanceQuery::CgalAabb: return "aabb";
+    }
+    return "?";
+}
+
+void validate(const PipelineOptions& o) {
+    const ScanConvertOptions& s = o.scan;
+    if (!(s.voxel_size >= 0) || !std::isfinite(s.voxel_size)) bad_option("scan.voxel_size", str(s.voxel_size), ">= 0");
+    if (s.voxel_size == 0 && s.resolution < 1) bad_option("scan.resolution", str(s.resolution), ">= 1");
+    if (!(s.half_width >= 1) || !std::isfinite(s.half_width)) bad_option("scan.half_width", str(s.half_width), ">= 1");
+    if (!(s.shell_thickness >= 0) || !std::isfinite(s.shell_thickness))
+        bad_option("scan.shell_thickness", str(s.shell_thickness), ">= 0");
+    if (s.threads < 0) bad_option("scan.threads", str(s.threads), ">= 0");
+    if (o.smoothing) {
+        const SmoothOptions& m = o.smooth;
+        if (m.iterations < 0) bad_option("smooth.iterations", str(m.iterations), ">= 0");
+        if (m.normal_steps < 1) bad_option("smooth.normal_steps", str(m.normal_steps), ">= 1");
+        if (!(m.mu > 0) || !std::isfinite(m.mu)) bad_option("smooth.mu", str(m.mu), "> 0");
+        if (!(m.alpha >= 0) || !std::isfinite(m.alpha)) bad_option("smooth.alpha", str(m.alpha), ">= 0");
+        if (m.conductance_presmooth_steps < 0)
+            bad_option("smooth.conductance_presmooth_steps", str(m.conductance_presmooth_steps), ">= 0");
+        if (!(m.mu_robust >= 0) || !std::isfinite(m.mu_robust)) bad_option("smooth.mu_robust", str(m.mu_robust), ">= 0");
+        if (m.threads < 0) bad_option("smooth.threads", str(m.threads), ">= 0");
+    }
+    if (!std::isfinite(o.extract.iso)) bad_option("extract.iso", str(o.extract.iso), "a finite value");
+    if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
+#ifndef NORMALFLOW_HAS_CGAL
+    if (o.target_faces > 0)
+        throw InvalidInput("smooth_mesh: target_faces (--target-faces): decimation needs a build with CGAL");
+    if (o.distance == DistanceQuery::CgalAabb)
+        throw InvalidInput("smooth_mesh: distance = aabb: CGAL's AABB tree needs a build with CGAL");
+#endif
+}
+
+ScanConvertOptions effective_scan_options(const PipelineOptions& o) {
+    ScanConvertOptions s = o.scan;
+    if (o.smoothing) s.half_width = std::max(s.half_width, kSmoothingScanBandVoxels);
+    return s;
+}
+
+double check_memory(const Mesh& mesh, const PipelineOptions& o) {
+    if (mesh.triangles.empty()) return 0;  // scan_convert gives the clear message
+    const ScanConvertOptions s = effective_scan_options(o);
+    const Box3d box = bounding_box(mesh);
+    const Vec3d size = box.max - box.min;
+    const double longest = std::max({size.x, size.y, size.z});
+    const double h = s.voxel_size > 0 ? s.voxel_size : longest / s.resolution;
+    if (!(h > 0) || !std::isfinite(h)) return 0;
+    const MemoryEstimate e = estimate_memory(mesh, h, o.smoothing ? kEngineBandVoxels : s.half_width);
+    const double need = e.total(o.smoothing);
+    const std::size_t limit = o.max_memory_bytes > 0 ? o.max_memory_bytes : available_memory_bytes();
+    if (limit > 0 && need > double(limit))
+        throw OutOfMemory("this run needs about " + format_bytes(need) + " at voxel size " + std::to_string(h) +
+                          ", more than the " + format_bytes(double(limit)) +
+                          (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
+                          "; lower --resolution or raise --max-memory");
+    if (e.grid_samples / 512 > 2.0e9)
+        throw OutOfMemory("the grid would have more than 2^31 blocks; lower --resolution");
+    return need;
+}
+
+Volume mesh_to_volume(const Mesh& input, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
+    validate(o);
+    PipelineReport local;
+    PipelineReport& r = report ? *report : local;
+    Stopwatch clock;
+    const Mesh* mesh = &input;
+    Mesh repaired;
+    if (o.repair) {
+#ifdef NORMALFLOW_HAS_CGAL
+        detail::begin(progress, "repair");
+        repaired = input;
+        r.repair = repair_mesh(repaired);
+        r.repaired = true;
+        mesh = &repaired;
+        append(r.warnings, r.repair.warnings);
+#else
+        r.warnings.push_back("repair skipped: this build has no CGAL (NORMALFLOW_WITH_CGAL=OFF)");
+#endif
+    }
+    r.seconds.repair = clock.lap();
+    r.memory_estimate_bytes = check_memory(*mesh, o);
+    detail::begin(progress, "voxelize");
+    r.scan_options = effective_scan_options(o);
+    r.distance = o.distance;
+    std::unique_ptr<ClosestTriangleQuery> query;
+#ifdef NORMALFLOW_HAS_CGAL
+    if (o.distance == DistanceQuery::CgalAabb) query = make_aabb_query(*mesh);
+#endif
+    if (!query) query = make_bvh_query(*mesh);
+    Volume v = scan_convert(*mesh, *query, r.scan_options, &r.scan, progress);
+    append(r.warnings, r.scan.warnings);
+    r.seconds.voxelize = clock.lap();
+    r.seconds.total = r.seconds.repair + r.seconds.voxelize;
+    r.peak_memory_bytes = peak_memory_bytes();
+    return v;
+}
+
+Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
+    if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
+#ifndef NORMALFLOW_HAS_CGAL
+    if (o.target_faces > 0)
+        throw InvalidInput("smooth_mesh: target_faces (--target-faces): decimation needs a build with CGAL");
+#endif
+    PipelineReport local;
+    PipelineReport& r = report ? *report : local;
+    Stopwatch clock;
+    detail::begin(progress, "extract");
+    Mesh m = extract_surface(v, o.extract, &r.extract);
+    r.seconds.extract = clock.lap();
+    if (m.empty()) {
+        if (o.smoothing)
+            throw InvalidInput("the surface vanished during smoothing (parts thinner than a few voxels "
+                               "shrink away); raise --resolution or lower --iterations");
+        throw InvalidInput("the volume holds no surface (every sample has the same sign)");
+    }
+#ifdef NORMALFLOW_HAS_CGAL
+    if (o.target_faces > 0) {
+        detail::begin(progress, "decimate");
+        cgal::CleanupOptions co;
+        co.reduction = cgal::CleanupReduction::FaceCount;
+        co.target_faces = o.target_faces;
+        r.decimate = cgal::cleanup_mesh(m, co);
+        r.decimated = true;
+        append(r.warnings, r.decimate.warnings);
+        r.seconds.decimate = clock.lap();
+    }
+#endif
+    r.seconds.total += r.seconds.extract + r.seconds.decimate;
+    r.peak_memory_bytes = peak_memory_bytes();
+    return m;
+}
+
+Mesh smooth_mesh(const Mesh& m, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
+    PipelineReport local;
+    PipelineReport& r = report ? *report : local;
+    r = PipelineReport{};
+    Volume v = mesh_to_volume(m, o, &r, progress);
+    if (o.smoothing) {
+        Stopwatch clock;
+        r.smooth = smooth_volume(v, o.smooth, progress);
+        r.smoothed = true;
+        append(r.warnings, r.smooth.warnings);
+        r.seconds.smooth = clock.lap();
+        r.seconds.total += r.seconds.smooth;
+    }
+    return volume_to_mesh(v, o, &r, progress);
+}
+
+}  // namespace normalflow

@@ -1,0 +1,139 @@
+#pragma once
+/// \file pipeline.h
+/// The whole mesh-to-mesh pipeline of normalflow in one call: repair → scan conversion → level-set
+/// normal-map smoothing (Tasdizen et al. 2003) → marching-tetrahedra extraction → decimation.
+/// The normalflow tool (voxelize, extract, smooth) and the pipeline benchmarks run exactly this.
+/// No CGAL type appears here; repair and decimation need a build with NORMALFLOW_WITH_CGAL.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "core/volume.h"
+#include "extract/extract_surface.h"
+#include "io/cgal/cleanup.h"
+#include "io/cgal/repair.h"
+#include "io/pipeline/system_memory.h"
+#include "normals/smooth.h"
+#include "sdf/scan_convert.h"
+
+namespace normalflow {
+
+/// Which closest-triangle search scan conversion uses. Both give the exact closest point (up to
+/// rounding) and hence the same distances.
+enum class DistanceQuery {
+    EngineBvh,  ///< lib/sdf make_bvh_query: the engine's own BVH (less than half the cost of CGAL's tree)
+    CgalAabb,   ///< io/cgal make_aabb_query: CGAL's AABB tree (needs a build with CGAL)
+};
+
+/// "bvh" or "aabb", as the command line spells it.
+const char* to_string(DistanceQuery q);
+
+/// Band half-width, voxels, that scan conversion uses at least when smooth_volume runs next:
+/// smooth_volume rebuilds its own 8-voxel band (kEngineBandVoxels) from the surface, so a
+/// 3-voxel band holds all it reads.
+inline constexpr float kSmoothingScanBandVoxels = 3.0f;
+/// Band half-width, voxels, of the volume smooth_volume returns (see smooth.h); the memory
+/// estimate of a smoothing run uses it.
+inline constexpr float kEngineBandVoxels = 8.0f;
+
+/// Options of smooth_mesh (and of its halves, mesh_to_volume and volume_to_mesh).
+struct PipelineOptions {
+    /// Scan conversion: resolution or voxel size, band half-width (raised to
+    /// kSmoothingScanBandVoxels when smoothing), shell thickness, threads.
+    ScanConvertOptions scan;
+    /// Repair the mesh first (io/cgal repair_mesh: merge points, drop degenerate and duplicate
+    /// faces, orient). Without CGAL it is skipped with a warning.
+    bool repair = true;
+    /// Closest-triangle search of the scan conversion.
+    DistanceQuery distance = DistanceQuery::EngineBvh;
+    /// Run smooth_volume between scan conversion and extraction (false: voxelize and extract only).
+    bool smoothing = true;
+    /// The engine's options (mode, iterations, ...); used when smoothing.
+    SmoothOptions smooth;
+    /// Extraction of the zero level set.
+    ExtractOptions extract;
+    /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (CGAL edge collapse,
+    /// io/cgal cleanup_mesh); 0: keep every triangle. Needs a build with CGAL.
+    std::size_t target_faces = 0;
+    /// Refuse, before anything big is allocated, a run estimated to need more than this many
+    /// bytes; 0: the memory the system has available now (MemAvailable).
+    std::size_t max_memory_bytes = 0;
+};
+
+/// Wall seconds of each stage of a run.
+struct PipelineSeconds {
+    double repair = 0;
+    double voxelize = 0;  ///< memory check and scan conversion (distance-query build included)
+    double smooth = 0;
+    double extract = 0;
+    double decimate = 0;
+    double total = 0;
+};
+
+/// What smooth_mesh (or one of its halves) did.
+struct PipelineReport {
+    bool repaired = false;       ///< repair ran (options.repair and a build with CGAL)
+    RepairReport repair;         ///< valid when repaired
+    DistanceQuery distance = DistanceQuery::EngineBvh;  ///< the query used
+    ScanConvertOptions scan_options;  ///< the scan conversion's options as run (band rule applied)
+    double memory_estimate_bytes = 0; ///< estimated peak of the run (see check_memory)
+    ScanConvertReport scan;
+    bool smoothed = false;       ///< smooth_volume ran
+    SmoothReport smooth;         ///< valid when smoothed
+    ExtractReport extract;
+    bool decimated = false;      ///< decimation ran (target_faces > 0)
+    cgal::CleanupReport decimate;  ///< valid when decimated
+    PipelineSeconds seconds;
+    std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
+    std::vector<std::string> warnings;  ///< every stage's warnings, in stage order
+};
+
+/// Smooths a triangle mesh through its signed distance volume: repairs a copy of m (optional),
+/// scan-converts it (scan_convert) into a narrow band of max(scan.half_width,
+/// kSmoothingScanBandVoxels) voxels, filters the normal map and refits (smooth_volume, Tasdizen
+/// et al. 2003), extracts the zero level set as a closed manifold mesh (extract_surface), and
+/// decimates it (optional). With options.smoothing = false the volume goes to extraction as
+/// scanned (a remeshing).
+///
+/// Accepted input: what scan_convert accepts (any triangle soup; open sheets need
+/// scan.shell_thickness). The result is closed and manifold (before decimation by construction).
+/// \throw InvalidInput for bad options (the message names the field, e.g. "smooth.mu"), a mesh
+///        scan_convert refuses, or a surface that vanished during smoothing;
+///        OutOfMemory when the estimated peak exceeds the limit (check_memory);
+///        NumericalError, Cancelled as the stages throw them.
+/// Messages do not name the input; a caller that has a file name prefixes it.
+/// Threading: scan.threads and smooth.threads; the result does not depend on them.
+Mesh smooth_mesh(const Mesh& m, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
+                 Progress* progress = nullptr);
+
+/// The first half of smooth_mesh: validation, repair, memory check and scan conversion. When
+/// options.smoothing, the band is at least kSmoothingScanBandVoxels and the memory check counts the
+/// engine. Fills the repair, scan and seconds parts of report (and its warnings).
+Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
+                      Progress* progress = nullptr);
+
+/// The second half of smooth_mesh: extraction and, with options.target_faces > 0, decimation.
+/// options.smoothing only selects the message when the volume holds no surface.
+/// \throw InvalidInput if the volume holds no surface.
+Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
+                    Progress* progress = nullptr);
+
+/// Checks every option smooth_mesh uses before any work is done.
+/// \throw InvalidInput naming the field ("scan.resolution = 0: expected >= 1").
+void validate(const PipelineOptions& options);
+
+/// The scan conversion options smooth_mesh runs with: options.scan with the band rule applied.
+ScanConvertOptions effective_scan_options(const PipelineOptions& options);
+
+/// Refuses, before anything big is allocated, a run whose estimated peak (estimate_memory,
+/// sdf/memory_estimate.h) exceeds options.max_memory_bytes or, when 0, what the system has
+/// available. Returns the estimate in bytes (0 for a mesh without triangles or a bad voxel size,
+/// which scan_convert refuses with a clear message).
+/// \throw OutOfMemory "this run needs about ... at voxel size ..., more than the ... available; lower
+///        --resolution or raise --max-memory".
+double check_memory(const Mesh& m, const PipelineOptions& options);
+
+}  // namespace normalflow

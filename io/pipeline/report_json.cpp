@@ -1,0 +1,95 @@
+#include "io/pipeline/report_json.h"
+
+namespace normalflow {
+
+Json to_json(const RepairReport& r) {
+    Json j = Json::object();
+    j.set("points_merged", r.points_merged).set("degenerate_removed", r.degenerate_removed)
+        .set("duplicates_removed", r.duplicates_removed).set("faces_reversed", r.faces_reversed)
+        .set("orientable", r.orientable).set("patches_inverted", r.patches_inverted)
+        .set("open_patches", r.open_patches).set("warnings", Json::array(r.warnings));
+    return j;
+}
+
+Json to_json(const ScanConvertReport& r) {
+    Json j = Json::object();
+    j.set("dims", Json::array(std::vector<int>(r.grid.dims.begin(), r.grid.dims.end())))
+        .set("voxel_size", r.grid.voxel_size)
+        .set("origin", Json::array(std::vector<double>{r.grid.origin.x, r.grid.origin.y, r.grid.origin.z}))
+        .set("band_voxels", r.band_voxels).set("blocks", r.blocks).set("candidate_blocks", r.candidate_blocks)
+        .set("uncertain_sign", r.uncertain_sign).set("winding_evaluations", r.winding_evaluations)
+        .set("tile_conflict_blocks", r.tile_conflict_blocks).set("seconds_distance", r.seconds_distance)
+        .set("seconds_sign", r.seconds_sign).set("memory_bytes", r.memory_bytes)
+        .set("warnings", Json::array(r.warnings));
+    return j;
+}
+
+Json to_json(const SmoothReport& r) {
+    Json j = Json::object();
+    j.set("iterations", r.iterations).set("seconds_per_iteration", Json::array(r.seconds_per_iteration))
+        .set("band_voxels", Json::array(r.band_voxels)).set("allocated_voxels", Json::array(r.allocated_voxels))
+        .set("normal_energy_start", Json::array(r.normal_energy_start))
+        .set("normal_energy", Json::array(r.normal_energy))
+        .set("refit_energy_start", Json::array(r.refit_energy_start))
+        .set("refit_energy", Json::array(r.refit_energy)).set("refit_steps", Json::array(r.refit_steps));
+    if (!r.mu.empty()) j.set("mu", Json::array(r.mu));
+    j.set("stopped_unchanged", r.stopped_unchanged).set("seconds_normals", r.seconds_normals)
+        .set("seconds_refit", r.seconds_refit).set("seconds_reinit", r.seconds_reinit)
+        .set("warnings", Json::array(r.warnings));
+    return j;
+}
+
+Json to_json(const ExtractReport& r) {
+    Json j = Json::object();
+    j.set("vertices", r.vertices).set("triangles", r.triangles).set("closed", r.closed).set("manifold", r.manifold);
+    return j;
+}
+
+Json to_json(const cgal::CleanupReport& r) {
+    Json j = Json::object();
+    j.set("faces_before", r.faces_before).set("faces_after", r.faces_after)
+        .set("vertices_before", r.vertices_before).set("vertices_after", r.vertices_after)
+        .set("degenerate_removed", r.degenerate_removed).set("components_removed", r.components_removed)
+        .set("faces_in_removed_components", r.faces_in_removed_components)
+        .set("components_reversed", r.components_reversed).set("hausdorff", r.hausdorff)
+        .set("result_to_input", r.result_to_input).set("input_to_result", r.input_to_result)
+        .set("closed", r.closed).set("manifold", r.manifold).set("self_intersections", r.self_intersections)
+        .set("self_intersections_found", r.self_intersections_found).set("seconds", r.seconds)
+        .set("warnings", Json::array(r.warnings));
+    return j;
+}
+
+Json to_json(const MeshReport& r) {
+    Json j = Json::object();
+    j.set("vertices", r.vertices).set("input_vertices", r.input_vertices)
+        .set("referenced_vertices", r.referenced_vertices).set("triangles", r.faces).set("edges", r.edges)
+        .set("components", r.components).set("boundary_edges", r.boundary_edges)
+        .set("non_manifold_edges", r.non_manifold_edges).set("non_manifold_vertices", r.non_manifold_vertices)
+        .set("degenerate_faces", r.degenerate_faces).set("collapsed_faces", r.collapsed_faces)
+        .set("duplicate_faces", r.duplicate_faces).set("inconsistent_edges", r.inconsistent_edges)
+        .set("closed", r.closed).set("manifold", r.manifold).set("oriented", r.oriented)
+        .set("euler_characteristic", r.euler_characteristic).set("area", r.area).set("volume", r.volume);
+    Json box = Json::array();
+    for (double c : {r.bbox.min.x, r.bbox.min.y, r.bbox.min.z, r.bbox.max.x, r.bbox.max.y, r.bbox.max.z}) box.push(c);
+    j.set("bbox", box).set("warnings", Json::array(r.warnings));
+    return j;
+}
+
+Json to_json(const PipelineReport& r) {
+    Json j = Json::object();
+    if (r.repaired) j.set("repair", to_json(r.repair));
+    j.set("distance", to_string(r.distance)).set("memory_estimate_bytes", r.memory_estimate_bytes);
+    Json vox = to_json(r.scan);
+    vox.set("band_half_width", r.scan_options.half_width);
+    j.set("voxelize", vox);
+    if (r.smoothed) j.set("smooth", to_json(r.smooth));
+    j.set("extract", to_json(r.extract));
+    if (r.decimated) j.set("decimate", to_json(r.decimate));
+    Json s = Json::object();
+    s.set("repair", r.seconds.repair).set("voxelize", r.seconds.voxelize).set("smooth", r.seconds.smooth)
+        .set("extract", r.seconds.extract).set("decimate", r.seconds.decimate).set("total", r.seconds.total);
+    j.set("seconds", s).set("peak_memory_bytes", r.peak_memory_bytes).set("warnings", Json::array(r.warnings));
+    return j;
+}
+
+}  // namespace normalflow

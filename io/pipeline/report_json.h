@@ -1,0 +1,52 @@
+#pragma once
+/// \file report_json.h
+/// One JSON rendering per report type, for `--json` outputs and benchmark tables. Each function
+/// returns an object whose keys are the report's field names (vectors as arrays); the normalflow
+/// tool adds what only it knows (file names, read and write times).
+
+#include "core/mesh_report.h"
+#include "extract/extract_surface.h"
+#include "io/cgal/cleanup.h"
+#include "io/cgal/repair.h"
+#include "io/formats/json.h"
+#include "io/pipeline/pipeline.h"
+#include "normals/smooth.h"
+#include "sdf/scan_convert.h"
+
+namespace normalflow {
+
+/// points_merged, degenerate_removed, duplicates_removed, faces_reversed, orientable,
+/// patches_inverted, open_patches, warnings.
+Json to_json(const RepairReport& r);
+
+/// dims, voxel_size, origin, band_voxels, blocks, candidate_blocks, uncertain_sign,
+/// winding_evaluations, tile_conflict_blocks, seconds_distance, seconds_sign, memory_bytes, warnings.
+Json to_json(const ScanConvertReport& r);
+
+/// iterations, seconds_per_iteration, band_voxels, allocated_voxels, normal_energy_start,
+/// normal_energy, refit_energy_start, refit_energy, refit_steps, mu (Anisotropic only),
+/// stopped_unchanged, seconds_normals, seconds_refit, seconds_reinit, warnings (the per-step
+/// energy arrays are left out).
+Json to_json(const SmoothReport& r);
+
+/// vertices, triangles, closed, manifold.
+Json to_json(const ExtractReport& r);
+
+/// faces_before, faces_after, vertices_before, vertices_after, degenerate_removed,
+/// components_removed, faces_in_removed_components, components_reversed, hausdorff,
+/// result_to_input, input_to_result, closed, manifold, self_intersections,
+/// self_intersections_found, seconds, warnings.
+Json to_json(const cgal::CleanupReport& r);
+
+/// vertices (welded), input_vertices, referenced_vertices, triangles (= faces), edges, components,
+/// boundary_edges, non_manifold_edges, non_manifold_vertices, degenerate_faces, collapsed_faces,
+/// duplicate_faces, inconsistent_edges, closed, manifold, oriented, euler_characteristic, area,
+/// volume, bbox [min x, y, z, max x, y, z], warnings.
+Json to_json(const MeshReport& r);
+
+/// repair (when repaired), distance, memory_estimate_bytes, voxelize (the scan report plus
+/// band_half_width as run), smooth (when smoothed), extract, decimate (when decimated),
+/// seconds {repair, voxelize, smooth, extract, decimate, total}, peak_memory_bytes, warnings.
+Json to_json(const PipelineReport& r);
+
+}  // namespace normalflow
