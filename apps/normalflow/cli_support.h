@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/progress.h"
-#include "io/formats/json.h"
+#include "io/util/json.h"
 
 namespace normalflow::cli {
 

@@ -11,7 +11,7 @@
 
 #include "commands.h"
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 #include "io/io.h"
 #include "io/render/comparison_pictures.h"
 #include "metrics/compare.h"

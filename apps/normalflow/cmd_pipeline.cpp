@@ -171,11 +171,10 @@ void write_result(const std::string& output, const Mesh& m, TerminalProgress& pr
                   const DracoOptions& draco = {}) {
     Stopwatch clock;
     progress.begin("write");
-    switch (mesh_format_from_path(output)) {
-        case MeshFormat::Drc: write_drc(output, m, draco); break;
-        case MeshFormat::Glb: write_draco_glb(output, m, draco); break;  // KHR_draco_mesh_compression
-        default: write_mesh(output, m);
-    }
+    WriteOptions wo;
+    wo.glb = GlbEncoding::Draco;  // .glb: KHR_draco_mesh_compression
+    wo.draco = draco;
+    write_mesh(output, m, wo);
     const MeshReport r = mesh_report(m);
     Json out = Json::object();
     out.set("file", output).set("vertices", m.positions.size()).set("triangles", m.triangles.size())

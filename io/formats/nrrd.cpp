@@ -21,7 +21,7 @@
 #endif
 
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 
 namespace normalflow {
 

@@ -26,8 +26,8 @@
 #include <unistd.h>
 
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
-#include "io/formats/isolate.h"
+#include "io/util/atomic_file.h"
+#include "io/util/isolate.h"
 
 namespace normalflow {
 
@@ -181,7 +181,7 @@ struct Tile {
     std::uint32_t active;
 };
 
-/// Reads the first float grid of the file in a forked child (io/formats/isolate.h), so that a crash or
+/// Reads the first float grid of the file in a forked child (io/util/isolate.h), so that a crash or
 /// undefined behaviour inside OpenVDB's reader on a corrupt file becomes an IoError (fuzz finding
 /// vdb-9f74bbba), and rebuilds it here from plain arrays: transform (checked in the child), class,
 /// background, normalflow_dims metadata, tiles that differ from inactive background, and leaves.

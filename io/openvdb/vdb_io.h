@@ -23,7 +23,7 @@ namespace normalflow {
 ///        truncated or corrupt data, no float grid, an empty grid, a non-uniform / rotated /
 ///        non-linear transform, a non-positive background, NaN/Inf values, or an extent too large;
 ///        IoError if OpenVDB crashes on the file. The file is read by OpenVDB in a forked child
-///        (io/formats/isolate.h) that sends back the grid's tiles and leaves; this process rebuilds it.
+///        (io/util/isolate.h) that sends back the grid's tiles and leaves; this process rebuilds it.
 /// Cost: O(#leaves * 512 + #blocks of the extent). Call of openvdb::initialize() once (call_once).
 Volume read_vdb(const std::string& path);
 
