@@ -4,10 +4,10 @@
 // Contract under test (issue 7): any byte string either reads into a valid Mesh/Volume or throws
 // InvalidInput / IoError / OutOfMemory. Any other exception, a crash, a leak, a hang, or a result
 // that breaks the type's invariant (index out of range, non-finite value) is a finding.
-#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 #include <string_view>
 
@@ -29,23 +29,26 @@ using namespace normalflow;
 
 const std::string kExt = NF_STR(NF_FUZZ_FORMAT);
 
-[[noreturn]] void finding(const char* what) {
-    std::fprintf(stderr, "fuzz_read_%s: %s\n", kExt.c_str(), what);
+[[noreturn]] void finding(const std::string& what) {
+    std::fprintf(stderr, "fuzz_read_%s: %s\n", kExt.c_str(), what.c_str());
     std::abort();
 }
 
+/// A reader's result must pass the same checks every stage applies to its input.
 void check(const Mesh& m) {
-    for (const Vec3f& p : m.positions)
-        if (!is_finite(p)) finding("a reader returned a non-finite position");
-    for (const Tri& t : m.triangles)
-        for (std::uint32_t i : t)
-            if (i >= m.positions.size()) finding("a reader returned a face index out of range");
+    try {
+        check_mesh(m, "a reader returned a mesh that breaks the Mesh invariant");
+    } catch (const std::exception& e) {
+        finding(e.what());
+    }
 }
 
 void check(const Volume& v) {
-    if (!(v.grid.voxel_size > 0) || !std::isfinite(v.grid.voxel_size)) finding("volume with a bad voxel size");
-    for (float x : v.values)
-        if (!std::isfinite(x)) finding("a reader returned a non-finite sample");
+    try {
+        v.check("a reader returned a volume that breaks the Volume invariants");
+    } catch (const std::exception& e) {
+        finding(e.what());
+    }
 }
 
 /// Readers that only take a path get the bytes through a private temporary file.

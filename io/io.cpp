@@ -83,12 +83,16 @@ void write_mesh(const std::string& path, const Mesh& m, const WriteOptions& opt)
         case MeshFormat::Ply: return write_ply(path, m, opt);
         case MeshFormat::Off: return write_off(path, m, opt);
         case MeshFormat::Stl: return write_stl(path, m, opt);
-        case MeshFormat::Glb: return write_glb(path, m);
+        case MeshFormat::Glb:
+#if NORMALFLOW_HAS_DRACO
+            if (opt.glb == GlbEncoding::Draco) return write_draco_glb(path, m, opt.draco);  // KHR_draco_mesh_compression
+#endif
+            return write_glb(path, m);
         case MeshFormat::Gltf:
             throw InvalidInput("write_mesh: " + path + ": writing .gltf is not supported; use .glb");
         case MeshFormat::Drc:
 #if NORMALFLOW_HAS_DRACO
-            return write_drc(path, m);
+            return write_drc(path, m, opt.draco);
 #else
             no_support("write_mesh", path, "writing .drc", "Draco");
 #endif

@@ -8,12 +8,12 @@
 /// Every error is thrown (IoError for the file system, InvalidInput for bad contents) with a
 /// message that names the file and the problem.
 
-#include <cstddef>
 #include <string>
-#include <vector>
 
 #include "core/mesh.h"
 #include "core/volume.h"
+#include "io/util/read_info.h"      // ReadInfo
+#include "io/util/write_options.h"  // WriteOptions, DracoOptions
 
 namespace normalflow {
 
@@ -22,20 +22,6 @@ enum class MeshFormat { Unknown, Obj, Ply, Off, Stl, Gltf, Glb, Drc };
 /// The format implied by path's extension (case-insensitive); Unknown if none matches.
 MeshFormat mesh_format_from_path(const std::string& path);
 
-/// What a reader found in the file, before any repair.
-struct ReadInfo {
-    std::string format;               ///< "obj", "ply-ascii", "ply-binary-le", "stl-binary", ...
-    std::size_t file_vertices = 0;    ///< points in the file
-    std::size_t file_faces = 0;       ///< polygons in the file (before triangulation)
-    std::size_t polygons_split = 0;   ///< faces with more than 3 corners, split into triangles (fan)
-    std::vector<std::string> warnings;  ///< oddities handled (e.g. "12 faces had more than 3 corners")
-};
-
-/// Options for writing meshes.
-struct WriteOptions {
-    bool binary = true;   ///< PLY/STL: binary (default) or ASCII
-};
-
 /// Reads a mesh as a polygon soup: every face is kept (polygons are split into a triangle fan),
 /// points are not merged, orientation is not changed.
 /// \throw IoError if the file cannot be opened or read; InvalidInput for unknown extensions and bad
@@ -43,8 +29,13 @@ struct WriteOptions {
 ///        corners, no faces).
 Mesh read_mesh(const std::string& path, ReadInfo* info = nullptr);
 
-/// Writes m in the format implied by path's extension, atomically (temporary file + rename).
-/// \throw InvalidInput for unknown extensions or invalid meshes; IoError if the file cannot be written.
+/// Writes m in the format implied by path's extension, atomically (temporary file + rename):
+/// .obj/.off, .ply/.stl (opt.binary), .drc (write_drc with opt.draco; needs Draco) and .glb: a plain
+/// GLB (write_glb) by default; with opt.glb = GlbEncoding::Draco, in builds with Draco, a
+/// KHR_draco_mesh_compression GLB (write_draco_glb with opt.draco). Callers need not dispatch on the
+/// extension themselves.
+/// \throw InvalidInput for unknown extensions, .gltf, .drc without Draco, invalid meshes or Draco
+///        options out of range; IoError if the file cannot be written.
 void write_mesh(const std::string& path, const Mesh& m, const WriteOptions& opt = {});
 
 /// True for .vdb and .nrrd paths.

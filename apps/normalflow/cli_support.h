@@ -8,8 +8,8 @@
 #include <string>
 
 #include "core/progress.h"
-#include "io/formats/json.h"
 #include "io/pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
+#include "io/util/json.h"
 
 namespace normalflow::cli {
 

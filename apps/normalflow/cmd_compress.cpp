@@ -6,7 +6,6 @@
 
 #include "commands.h"
 #include "core/errors.h"
-#include "io/draco/draco_io.h"
 #include "io/io.h"
 
 namespace normalflow::cli {
@@ -25,8 +24,10 @@ int run_compress(const CompressArgs& a) {
         throw InvalidInput("compress: " + a.output + ": output must be .drc or .glb");
     const Mesh m = read_mesh(a.input);
     const double t_read = clock.lap();
-    if (f == MeshFormat::Drc) write_drc(a.output, m, a.draco);
-    else write_draco_glb(a.output, m, a.draco);
+    WriteOptions wo;
+    wo.glb = GlbEncoding::Draco;
+    wo.draco = a.draco;
+    write_mesh(a.output, m, wo);
     const double t_write = clock.lap();
     const auto in_bytes = std::filesystem::file_size(a.input);
     const auto out_bytes = std::filesystem::file_size(a.output);

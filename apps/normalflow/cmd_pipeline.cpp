@@ -111,11 +111,10 @@ void write_result(const std::string& output, const Mesh& m, TerminalProgress& pr
                   const DracoOptions& draco = {}) {
     Stopwatch clock;
     progress.begin("write");
-    switch (mesh_format_from_path(output)) {
-        case MeshFormat::Drc: write_drc(output, m, draco); break;
-        case MeshFormat::Glb: write_draco_glb(output, m, draco); break;  // KHR_draco_mesh_compression
-        default: write_mesh(output, m);
-    }
+    WriteOptions wo;
+    wo.glb = GlbEncoding::Draco;  // .glb: KHR_draco_mesh_compression
+    wo.draco = draco;
+    write_mesh(output, m, wo);
     Json out = to_json(mesh_report(m));
     out.set("file", output).set("vertices", m.positions.size());
     j.set("output", out);

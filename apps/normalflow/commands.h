@@ -4,7 +4,7 @@
 // Each lives in its own cmd_*.cpp; adding a command is one line here, one in main.cpp and one in
 // CMakeLists.txt.
 #include "cli_support.h"
-#include "io/draco/draco_io.h"
+#include "io/util/write_options.h"
 
 namespace normalflow::cli {
 

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 #include "io/io.h"
 #include "io/openmesh/smoothing.h"
 #include "io/pipeline/pipeline.h"

@@ -23,9 +23,9 @@
 #include <vector>
 
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
-#include "io/formats/gltf_check.h"
-#include "io/formats/isolate.h"
+#include "io/util/atomic_file.h"
+#include "io/draco/gltf_check.h"
+#include "io/util/isolate.h"
 
 namespace normalflow {
 
@@ -285,7 +285,7 @@ Mesh read_gltf(const std::string& path, ReadInfo* info) {
     } else {
         check_gltf(std::string_view(data.data(), data.size()), std::nullopt, base_dir, who);
     }
-    // Decode in a forked child so that a crash inside Draco becomes an IoError (io/formats/isolate.h).
+    // Decode in a forked child so that a crash inside Draco becomes an IoError (io/util/isolate.h).
     // draco::ReadMeshFromFile runs draco::GltfDecoder::DecodeFromFile (all nodes, transforms applied).
     // (Including draco/io/gltf_decoder.h directly would need tiny_gltf.h, which Debian does not ship
     // with libdraco-dev, and would have to match the copy compiled into libdraco exactly.)
@@ -321,7 +321,7 @@ Mesh read_drc(const std::string& path, ReadInfo* info) {
     if (data.size() < 5 || std::memcmp(data.data(), "DRACO", 5) != 0)
         throw InvalidInput(who + ": not a Draco file (expected magic \"DRACO\")");
     // Decode in a forked child so that a crash or undefined behaviour inside Draco on a corrupt
-    // bitstream becomes an IoError (fuzz finding drc-80305ea1; io/formats/isolate.h).
+    // bitstream becomes an IoError (fuzz finding drc-80305ea1; io/util/isolate.h).
     const std::string bytes = run_isolated(who, [&] {
         draco::DecoderBuffer buf;
         buf.Init(data.data(), data.size());

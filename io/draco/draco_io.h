@@ -10,20 +10,10 @@
 #include <string>
 
 #include "core/mesh.h"
-#include "io/io.h"
+#include "io/util/read_info.h"
+#include "io/util/write_options.h"
 
 namespace normalflow {
-
-/// Options for Draco compression (write_drc, write_draco_glb).
-struct DracoOptions {
-    int position_bits = 14;     ///< bits per position axis, 1..30 (0 = lossless float storage is NOT supported)
-    int normal_bits = 10;       ///< bits per normal component, 1..30 (normalflow meshes carry no normals;
-                                ///< kept for files with normals and future use)
-    int compression_level = 7;  ///< 0 (fastest, largest) .. 10 (slowest, smallest); Draco speed = 10 - level
-    bool fallback = false;      ///< write_draco_glb only: also store uncompressed (dequantized) positions and
-                                ///< indices, and list KHR_draco_mesh_compression as used but not required,
-                                ///< so viewers without Draco can still show the mesh (file grows ~4x)
-};
 
 /// Reads all triangle primitives of all nodes of the default scene of a .gltf or .glb file, with
 /// each node's transform (matrix or TRS, composed down the node tree) applied to the positions.
@@ -33,9 +23,9 @@ struct DracoOptions {
 /// \param info  optional: format ("gltf"/"glb"), file_vertices (points after merging), file_faces
 /// \throw IoError if the file cannot be opened or read; InvalidInput naming the file for anything
 ///        else: truncated or garbage files, non-triangle primitives, missing buffers, no triangles,
-///        non-finite positions, and anything io/formats/gltf_check.h refuses (accessors outside their
+///        non-finite positions, and anything io/draco/gltf_check.h refuses (accessors outside their
 ///        buffer views, buffer views outside their buffers, indices past the last point, ...);
-///        IoError if Draco crashes on the file (it decodes in a forked child, io/formats/isolate.h).
+///        IoError if Draco crashes on the file (it decodes in a forked child, io/util/isolate.h).
 /// Cost: linear in the file size, plus one fork(). Single-threaded.
 Mesh read_gltf(const std::string& path, ReadInfo* info = nullptr);
 
@@ -43,7 +33,7 @@ Mesh read_gltf(const std::string& path, ReadInfo* info = nullptr);
 /// \param info  optional: format "drc", file_vertices, file_faces
 /// \throw IoError if the file cannot be opened or read; InvalidInput naming the file for truncated or
 ///        garbage data, point clouds (no faces), a missing POSITION attribute, non-finite positions;
-///        IoError if Draco crashes on the file (it decodes in a forked child, io/formats/isolate.h).
+///        IoError if Draco crashes on the file (it decodes in a forked child, io/util/isolate.h).
 Mesh read_drc(const std::string& path, ReadInfo* info = nullptr);
 
 /// Writes m as a Draco (.drc) bitstream (edgebreaker connectivity coding, falling back to sequential

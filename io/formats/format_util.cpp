@@ -1,6 +1,6 @@
 #include "io/formats/format_util.h"
 
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 
 #include <cerrno>
 #include <cstdio>

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 
 namespace normalflow {
 

@@ -28,7 +28,8 @@
 #include <string_view>
 
 #include "core/mesh.h"
-#include "io/io.h"
+#include "io/util/read_info.h"
+#include "io/util/write_options.h"
 
 namespace normalflow {
 

@@ -21,7 +21,7 @@
 #endif
 
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 
 namespace normalflow {
 
@@ -561,6 +561,7 @@ Volume NrrdReader::read() {
             }
         }
     }
+    vol.check("read_nrrd: " + path_);
     return vol;
 }
 
@@ -577,12 +578,8 @@ Volume read_nrrd(const std::string& path, const VolumeReadOptions& opt) { return
 Volume read_nrrd(const std::string& path) { return read_nrrd(path, VolumeReadOptions{}); }
 
 void write_nrrd(const std::string& path, const Volume& v) {
+    v.check("write_nrrd: " + path);
     const Grid& g = v.grid;
-    if (g.dims[0] <= 0 || g.dims[1] <= 0 || g.dims[2] <= 0)
-        throw InvalidInput("write_nrrd: " + path + ": empty grid");
-    if (!(g.voxel_size > 0) || !std::isfinite(g.voxel_size))
-        throw InvalidInput("write_nrrd: " + path + ": voxel size " + num(g.voxel_size) + " is not positive");
-    if (!is_finite(g.origin)) throw InvalidInput("write_nrrd: " + path + ": grid origin is not finite");
     const std::string h = num(g.voxel_size);
     std::string hdr = "NRRD0004\n# Complete NRRD file format specification at:\n"
                       "# http://teem.sourceforge.net/nrrd/format.html\n"

@@ -37,7 +37,7 @@ struct VolumeReadOptions {
 ///        contents: not NRRD, missing or malformed fields, dimension != 3, unsupported type or
 ///        encoding, detached data files, rotated/anisotropic/negative axes, sizes that claim more
 ///        data than the file holds (checked before allocating), truncated or corrupt data,
-///        NaN/Inf samples, and options out of range.
+///        NaN/Inf samples, and options out of range. The volume read passes Volume::check.
 /// Cost: O(#samples) time, memory O(stored blocks + one 8-slice slab). Single-threaded.
 Volume read_nrrd(const std::string& path, const VolumeReadOptions& opt);
 
@@ -49,7 +49,8 @@ Volume read_nrrd(const std::string& path);
 /// `normalflow_background:=` so read_nrrd restores v exactly. Samples in stored blocks are written
 /// as they are, others as +background (outside tiles) or -background (inside tiles).
 /// Written atomically (temporary file + rename), streaming one z-slice at a time.
-/// \throw InvalidInput if v has an empty grid or a non-positive voxel size; IoError if the file
+/// \throw InvalidInput (Volume::check) if v breaks its invariants (empty grid, non-positive voxel
+///        size, inconsistent blocks, ...); NumericalError for a NaN/Inf sample; IoError if the file
 ///        cannot be written.
 /// Cost: O(#samples) time and file size (4 bytes per sample). Single-threaded.
 void write_nrrd(const std::string& path, const Volume& v);

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 #include "io/formats/format_util.h"
 #include "io/formats/mesh_formats.h"
 

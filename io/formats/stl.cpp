@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 #include "io/formats/format_util.h"
 
 namespace normalflow {

@@ -26,8 +26,8 @@
 #include <unistd.h>
 
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
-#include "io/formats/isolate.h"
+#include "io/util/atomic_file.h"
+#include "io/util/isolate.h"
 
 namespace normalflow {
 
@@ -181,7 +181,7 @@ struct Tile {
     std::uint32_t active;
 };
 
-/// Reads the first float grid of the file in a forked child (io/formats/isolate.h), so that a crash or
+/// Reads the first float grid of the file in a forked child (io/util/isolate.h), so that a crash or
 /// undefined behaviour inside OpenVDB's reader on a corrupt file becomes an IoError (fuzz finding
 /// vdb-9f74bbba), and rebuilds it here from plain arrays: transform (checked in the child), class,
 /// background, normalflow_dims metadata, tiles that differ from inactive background, and leaves.
@@ -376,6 +376,7 @@ Volume read_vdb(const std::string& path) {
                 const float x = acc.getValue(mn + openvdb::Coord(bi * kBlockDim, bj * kBlockDim, bk * kBlockDim));
                 slot = x < 0 ? kBlockInside : kBlockOutside;
             }
+    vol.check(who);
     return vol;
 }
 
@@ -383,10 +384,7 @@ void write_vdb(const std::string& path, const Volume& v) {
     init_openvdb();
     const std::string who = "write_vdb: " + path;
     const Grid& g = v.grid;
-    if (g.dims[0] <= 0 || g.dims[1] <= 0 || g.dims[2] <= 0) throw InvalidInput(who + ": empty grid");
-    if (!(g.voxel_size > 0) || !std::isfinite(g.voxel_size)) throw InvalidInput(who + ": voxel size is not positive");
-    if (!(v.background > 0) || !std::isfinite(v.background)) throw InvalidInput(who + ": background is not positive");
-    if (!is_finite(g.origin)) throw InvalidInput(who + ": grid origin is not finite");
+    v.check(who);
 
     openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(v.background);
     openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(g.voxel_size);

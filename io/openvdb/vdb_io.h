@@ -23,7 +23,8 @@ namespace normalflow {
 ///        truncated or corrupt data, no float grid, an empty grid, a non-uniform / rotated /
 ///        non-linear transform, a non-positive background, NaN/Inf values, or an extent too large;
 ///        IoError if OpenVDB crashes on the file. The file is read by OpenVDB in a forked child
-///        (io/formats/isolate.h) that sends back the grid's tiles and leaves; this process rebuilds it.
+///        (io/util/isolate.h) that sends back the grid's tiles and leaves; this process rebuilds it.
+///        The volume read passes Volume::check.
 /// Cost: O(#leaves * 512 + #blocks of the extent). Call of openvdb::initialize() once (call_once).
 Volume read_vdb(const std::string& path);
 
@@ -32,8 +33,9 @@ Volume read_vdb(const std::string& path);
 /// (i, j, k) is our sample (i, j, k)), metadata normalflow_dims and normalflow_half_width.
 /// Stored blocks become leaves (values with |phi| < background active), inside tiles become
 /// inactive -background tiles; the tree is then pruned. Written atomically (temporary file + rename).
-/// \throw InvalidInput for an empty grid or a non-positive voxel size/background; IoError if the
-///        file cannot be written.
+/// \throw InvalidInput (Volume::check) if v breaks its invariants (empty grid, non-positive voxel
+///        size or background, inconsistent blocks, ...); NumericalError for a NaN/Inf sample; IoError
+///        if the file cannot be written.
 void write_vdb(const std::string& path, const Volume& v);
 
 }  // namespace normalflow

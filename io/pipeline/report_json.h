@@ -8,7 +8,7 @@
 #include "extract/extract_surface.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
-#include "io/formats/json.h"
+#include "io/util/json.h"
 #include "io/pipeline/pipeline.h"
 #include "normals/smooth.h"
 #include "sdf/scan_convert.h"

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "core/errors.h"
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 #ifdef NORMALFLOW_HAS_ZLIB
 #include <zlib.h>
 #endif

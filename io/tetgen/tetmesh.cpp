@@ -14,8 +14,8 @@
 
 #include "core/errors.h"
 #include "core/mesh_report.h"
-#include "io/formats/atomic_file.h"
-#include "io/formats/isolate.h"
+#include "io/util/atomic_file.h"
+#include "io/util/isolate.h"
 #ifdef NORMALFLOW_TETGEN_HAS_CGAL
 #include "io/cgal/repair.h"
 #endif
@@ -102,7 +102,7 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
         std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%da%.9gQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level,
                       opt.max_volume);
     else std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%dQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level);
-    // TetGen runs in a forked child (io/formats/isolate.h): a crash on its error paths becomes an
+    // TetGen runs in a forked child (io/util/isolate.h): a crash on its error paths becomes an
     // IoError instead of ending the process. TetGen is single-threaded, as the child requires.
     const auto run = [&](const std::string& switches) {
         return run_isolated("tetrahedralize", [&] {

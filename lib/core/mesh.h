@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "core/vec.h"
@@ -34,11 +35,16 @@ struct Box3d {
     void extend(const Vec3d& p) { min = cwise_min(min, p); max = cwise_max(max, p); }
 };
 
-/// Bounding box of all positions of m.
-/// Throws InvalidInput naming `who` unless every position of m is finite and every face index is
-/// below positions.size() ("who: position 7 is not finite", "who: face 3 has vertex index 9, expected < 8").
-void check_mesh(const Mesh& m, const char* who);
+/// Checks the Mesh invariant that every stage relies on: every triangle index is below
+/// positions.size() and every position (used by a triangle or not) is finite. An empty mesh passes
+/// (stages that need triangles say so themselves). Indices are checked first.
+/// \param who  message prefix naming the caller, e.g. "scan_convert"
+/// \throw InvalidInput "who: triangle 3 has vertex index 9, expected < 8" or
+///        "who: vertex 7 has a non-finite coordinate".
+/// Cost: one pass over the triangles and one over the positions; single-threaded.
+void check_mesh(const Mesh& m, std::string_view who);
 
+/// Bounding box of all positions of m.
 inline Box3d bounding_box(const Mesh& m) {
     Box3d b;
     for (const auto& p : m.positions) b.extend(Vec3d(p));

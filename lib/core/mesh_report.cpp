@@ -10,18 +10,6 @@
 
 namespace normalflow {
 
-void check_mesh(const Mesh& m, const char* who) {
-    const std::size_t n = m.positions.size();
-    for (std::size_t i = 0; i < n; ++i)
-        if (!is_finite(m.positions[i]))
-            throw InvalidInput(std::string(who) + ": position " + std::to_string(i) + " is not finite");
-    for (std::size_t f = 0; f < m.triangles.size(); ++f)
-        for (int k = 0; k < 3; ++k)
-            if (m.triangles[f][k] >= n)
-                throw InvalidInput(std::string(who) + ": face " + std::to_string(f) + " has vertex index " +
-                                   std::to_string(m.triangles[f][k]) + ", expected < " + std::to_string(n));
-}
-
 namespace {
 
 /// New index of every position after exact welding (first occurrence order); returns #unique.

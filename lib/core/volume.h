@@ -14,6 +14,7 @@
 #include <cassert>
 #include <cstddef>
 #include <cstdint>
+#include <string_view>
 #include <vector>
 
 #include "core/vec.h"
@@ -113,6 +114,18 @@ struct Volume {
     /// Pointer to the 512 values of allocated block slot b.
     float* block_values(std::int32_t b) { return values.data() + std::size_t(b) * kBlockVoxels; }
     const float* block_values(std::int32_t b) const { return values.data() + std::size_t(b) * kBlockVoxels; }
+
+    /// Checks the layout invariants every stage relies on: voxel_size finite and > 0, origin finite,
+    /// dims >= 1, background and half_width finite and > 0, block_dims = ceil(dims / 8), one table
+    /// entry per block, 512 values per allocated block, every allocated block's coordinates inside
+    /// block_dims and its table entry pointing back at it, every table entry a block index or
+    /// kBlockOutside/kBlockInside with exactly block_count() entries allocated, and every sample finite.
+    /// (The narrow-band invariant, |phi| < half_width · h only in allocated blocks, is not checked.)
+    /// \param who  message prefix naming the caller, e.g. "extract_surface" or "read_nrrd: a.nrrd"
+    /// \throw InvalidInput "who: volume block_table has 11 entries, expected 12" and the like;
+    ///        NumericalError "who: volume sample 7 of block 1 is NaN or infinite".
+    /// Cost: one pass over the table, the blocks and the values; single-threaded.
+    void check(std::string_view who) const;
 
     /// Bytes held by this volume (table + blocks).
     std::size_t memory_bytes() const {

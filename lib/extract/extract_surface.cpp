@@ -48,6 +48,7 @@ struct BlockOut {
 }  // namespace
 
 Mesh extract_surface(const Volume& v, const ExtractOptions& opt, ExtractReport* report) {
+    v.check("extract_surface");
     if (!std::isfinite(opt.iso) || !(std::abs(opt.iso) < v.background))
         throw InvalidInput("extract_surface: iso is " + std::to_string(opt.iso) + ", expected |iso| < background " +
                            std::to_string(v.background));

@@ -42,7 +42,8 @@ struct ExtractReport {
 /// unallocated neighbour blocks with opposite tile signs (a broken invariant) would leave a hole.
 /// An empty volume gives an empty mesh. Genus and components are whatever the level set has.
 ///
-/// \throw InvalidInput if iso is not finite or |iso| >= v.background.
+/// \throw InvalidInput if iso is not finite or |iso| >= v.background, or v breaks its invariants
+///        (Volume::check); NumericalError if v holds a NaN/Inf sample.
 /// Cost: O(allocated blocks) time and memory; TBB parallel_for over blocks, output identical for any
 /// thread count (vertices ordered by grid-edge key, triangles in block order).
 Mesh extract_surface(const Volume& v, const ExtractOptions& opt = {}, ExtractReport* report = nullptr);

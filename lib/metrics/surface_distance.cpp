@@ -87,8 +87,8 @@ SurfaceDistance surface_distance(const Mesh& a, const Mesh& b, const SurfaceSamp
     if (opt.samples == 0) throw InvalidInput("surface_distance: samples = 0, expected >= 1");
     if (a.triangles.empty()) throw InvalidInput("surface_distance: mesh a has no triangles");
     if (b.triangles.empty()) throw InvalidInput("surface_distance: mesh b has no triangles");
-    detail::validate_mesh(a, "surface_distance (mesh a)");
-    detail::validate_mesh(b, "surface_distance (mesh b)");
+    check_mesh(a, "surface_distance (mesh a)");
+    check_mesh(b, "surface_distance (mesh b)");
     const auto qa = make_bvh_query(a), qb = make_bvh_query(b);
     const Direction ab = sample_direction(a, b, *qb, opt.samples, opt.seed, 0, true);
     const Direction ba = sample_direction(b, a, *qa, opt.samples, opt.seed, 1, false);

@@ -18,7 +18,7 @@ Vec3d closest_on_segment(const Vec3d& p, const Vec3d& a, const Vec3d& b) {
 
 class BruteForceQuery final : public ClosestTriangleQuery {
 public:
-    explicit BruteForceQuery(const Mesh& m) : mesh_(m) { detail::validate_mesh(mesh_, "make_brute_force_query"); }
+    explicit BruteForceQuery(const Mesh& m) : mesh_(m) { check_mesh(mesh_, "make_brute_force_query"); }
 
     ClosestHit closest(const Vec3d& p) const override {
         ClosestHit best;
@@ -39,7 +39,7 @@ private:
 class BvhQuery final : public ClosestTriangleQuery {
 public:
     explicit BvhQuery(const Mesh& m) {
-        detail::validate_mesh(m, "make_bvh_query");
+        check_mesh(m, "make_bvh_query");
         bvh_.build(m, 4);
         corners_.resize(bvh_.order.size() * 3);
         leaf_of_.resize(m.triangles.size());

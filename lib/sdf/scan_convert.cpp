@@ -203,7 +203,7 @@ BlockStats process_block(const Context& c, const std::array<int, 3>& b, float* o
 Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConvertOptions& opt,
                     ScanConvertReport* report, Progress* progress) {
     if (m.empty()) throw InvalidInput("scan_convert: empty mesh (no triangles)");
-    detail::validate_mesh(m, "scan_convert");
+    check_mesh(m, "scan_convert");
     if (!(opt.half_width >= 1.0f) || !std::isfinite(opt.half_width))
         throw InvalidInput("scan_convert: half_width is " + std::to_string(opt.half_width) + " voxels, expected >= 1");
     if (!(opt.shell_thickness >= 0) || !std::isfinite(opt.shell_thickness))

@@ -87,18 +87,4 @@ void TriangleBvh::build(const Mesh& m, int leaf_size) {
     b.build(0, 0, nf);
 }
 
-void validate_mesh(const Mesh& m, const char* who) {
-    const std::size_t nv = m.positions.size();
-    for (std::size_t f = 0; f < m.triangles.size(); ++f)
-        for (int c = 0; c < 3; ++c) {
-            const std::uint32_t v = m.triangles[f][c];
-            if (v >= nv)
-                throw InvalidInput(std::string(who) + ": triangle " + std::to_string(f) + " has vertex index " +
-                                   std::to_string(v) + ", expected < " + std::to_string(nv));
-            if (!is_finite(m.positions[v]))
-                throw InvalidInput(std::string(who) + ": vertex " + std::to_string(v) +
-                                   " has a non-finite coordinate");
-        }
-}
-
 }  // namespace normalflow::detail

@@ -38,8 +38,4 @@ inline double box_squared_distance(const Vec3d& p, const Vec3d& lo, const Vec3d&
     return s;
 }
 
-/// Throws InvalidInput (prefixed with who) if m has an out-of-range index or a non-finite
-/// referenced position.
-void validate_mesh(const Mesh& m, const char* who);
-
 }  // namespace normalflow::detail

@@ -64,7 +64,7 @@ constexpr int cubic_index(int a, int b, int c) {
 }  // namespace
 
 WindingNumber::WindingNumber(const Mesh& m, double beta) : impl_(std::make_unique<Impl>()) {
-    detail::validate_mesh(m, "WindingNumber");
+    check_mesh(m, "WindingNumber");
     if (!(beta >= 1.0) || !std::isfinite(beta))
         throw InvalidInput("WindingNumber: beta = " + std::to_string(beta) + ", expected a finite value >= 1");
     Impl& I = *impl_;

@@ -1,4 +1,4 @@
-#include "io/formats/atomic_file.h"
+#include "io/util/atomic_file.h"
 
 #include <unistd.h>
 

@@ -1,4 +1,4 @@
-#include "io/formats/isolate.h"
+#include "io/util/isolate.h"
 
 #include <poll.h>
 #include <signal.h>

@@ -1,4 +1,4 @@
-#include "io/formats/gltf_check.h"
+#include "io/draco/gltf_check.h"
 
 #include <charconv>
 #include <cmath>

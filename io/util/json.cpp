@@ -1,4 +1,4 @@
-#include "io/formats/json.h"
+#include "io/util/json.h"
 
 #include <charconv>
 #include <cmath>
