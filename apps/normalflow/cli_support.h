@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/progress.h"
+#include "core/stopwatch.h"
 #include "io/pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
 #include "io/util/json.h"
 
@@ -47,23 +48,6 @@ bool interrupted();
 /// \throw InvalidInput naming the option for anything else.
 std::size_t parse_bytes(const std::string& text, const char* option);
 
-/// Wall-clock stopwatch in seconds.
-class Stopwatch {
-public:
-    Stopwatch() : t0_(std::chrono::steady_clock::now()) {}
-    double seconds() const {
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-    }
-    double lap() {
-        const auto t = std::chrono::steady_clock::now();
-        const double s = std::chrono::duration<double>(t - t0_).count();
-        t0_ = t;
-        return s;
-    }
-
-private:
-    std::chrono::steady_clock::time_point t0_;
-};
 
 /// Runs fn, mapping normalflow's exceptions to one line on stderr and an exit status:
 /// 0 ok, 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled.

@@ -1,7 +1,6 @@
 #include "io/pipeline/pipeline.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -9,6 +8,7 @@
 #include <type_traits>
 
 #include "core/errors.h"
+#include "core/stopwatch.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/memory_estimate.h"
 #ifdef NORMALFLOW_HAS_CGAL
@@ -18,19 +18,6 @@
 namespace normalflow {
 
 namespace {
-
-class Stopwatch {
-public:
-    double lap() {
-        const auto t = std::chrono::steady_clock::now();
-        const double s = std::chrono::duration<double>(t - t0_).count();
-        t0_ = t;
-        return s;
-    }
-
-private:
-    std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
-};
 
 [[noreturn]] void bad_option(const std::string& field, const std::string& value, const char* expected) {
     throw InvalidInput("smooth_mesh: " + field + " = " + value + ": expected " + expected);
@@ -189,10 +176,9 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
     return m;
 }
 
-Mesh smooth_mesh(const Mesh& m, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
-    PipelineReport local;
-    PipelineReport& r = report ? *report : local;
-    r = PipelineReport{};
+PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* progress) {
+    PipelineResult result;
+    PipelineReport& r = result.report;
     Volume v = mesh_to_volume(m, o, &r, progress);
     if (o.smoothing) {
         Stopwatch clock;
@@ -202,7 +188,8 @@ Mesh smooth_mesh(const Mesh& m, const PipelineOptions& o, PipelineReport* report
         r.seconds.smooth = clock.lap();
         r.seconds.total += r.seconds.smooth;
     }
-    return volume_to_mesh(v, o, &r, progress);
+    result.mesh = volume_to_mesh(v, o, &r, progress);
+    return result;
 }
 
 }  // namespace normalflow
