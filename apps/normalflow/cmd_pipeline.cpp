@@ -192,14 +192,15 @@ int run_smooth(const SmoothArgs& a) {
     ReadInfo info;
     const Mesh mesh = read_mesh(a.input, &info);
     const double t_read = clock.lap();
-    PipelineReport r;
-    const Mesh m = naming(a.input, [&] { return smooth_mesh(mesh, opt, &r, &progress); });
+    const PipelineResult result = naming(a.input, [&] { return smooth_mesh(mesh, opt, &progress); });
+    const PipelineReport& r = result.report;
+    const Mesh& m = result.mesh;
     Json j = report_json("smooth", r, t_read, &info);
     j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
     j["seconds"].set("extract", r.seconds.extract);
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
     if (r.smooth.stopped_unchanged)
-        progress.note("smooth: stopped after main iteration " + std::to_string(r.smooth.iterations) + " of " +
+        progress.note("smooth: stopped after main iteration " + std::to_string(r.smooth.iterations_run()) + " of " +
                       std::to_string(opt.smooth.iterations > 0 ? opt.smooth.iterations
                                                                : default_iterations(opt.smooth.mode)) +
                       ": its refit kept no step, so the surface no longer changes");

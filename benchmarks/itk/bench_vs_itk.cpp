@@ -410,12 +410,12 @@ int main(int argc, char** argv) {
                     r.name = "normalflow smooth_volume " + mode;
                     r.threads = t;
                     r.m = measure([&] { rep = smooth_volume(v, o); });
-                    r.iterations = rep.iterations;
-                    for (const double s : rep.seconds_per_iteration) r.loop_wall += s;
+                    r.iterations = rep.iterations_run();
+                    for (const SmoothIteration& it : rep.iterations) r.loop_wall += it.seconds;
                     int refits = 0;
-                    for (int s : rep.refit_steps) refits += s;
+                    for (const SmoothIteration& it : rep.iterations) refits += it.refit_steps;
                     char buf[64];
-                    std::snprintf(buf, sizeof buf, "25 / %.1f", double(refits) / std::max(rep.iterations, 1));
+                    std::snprintf(buf, sizeof buf, "25 / %.1f", double(refits) / std::max(rep.iterations_run(), 1));
                     r.steps = buf;
                     print_row(r);
                     if (first_values.empty()) first_values = v.values;

@@ -115,7 +115,7 @@ int main(int argc, char** argv) {
                 Volume v = input;
                 const SmoothReport rep = fn[w](v, o, nullptr);
                 double total = 0;
-                for (const double s : rep.seconds_per_iteration) total += s;
+                for (const SmoothIteration& it : rep.iterations) total += it.seconds;
                 normals[w].push_back(rep.seconds_normals / iterations);
                 refit[w].push_back(rep.seconds_refit / iterations);
                 reinit[w].push_back(rep.seconds_reinit / iterations);

@@ -136,17 +136,17 @@ void BM_MainIteration(benchmark::State& state, const std::string& name, const st
         const bool peak_ok = reset_peak_rss();
         rep = smooth_volume(v, o);
         if (peak_ok) peak_mib = double(status_kb("VmHWM") - rss0) / 1024.0;
-        state.SetIterationTime(rep.seconds_per_iteration.at(0));
+        state.SetIterationTime(rep.iterations.at(0).seconds);
         benchmark::DoNotOptimize(v.values.data());
     }
-    const double band = double(rep.band_voxels.at(0));
-    state.counters["s_per_iter"] = rep.seconds_per_iteration.at(0);
+    const double band = double(rep.iterations.at(0).band_voxels);
+    state.counters["s_per_iter"] = rep.iterations.at(0).seconds;
     state.counters["s_normals"] = rep.seconds_normals;
     state.counters["s_refit"] = rep.seconds_refit;
     state.counters["s_reinit"] = rep.seconds_reinit;
-    state.counters["refit_steps"] = rep.refit_steps.at(0);
+    state.counters["refit_steps"] = rep.iterations.at(0).refit_steps;
     state.counters["band_voxels"] = band;
-    state.counters["allocated_voxels"] = double(rep.allocated_voxels.at(0));
+    state.counters["allocated_voxels"] = double(rep.iterations.at(0).allocated_voxels);
     state.counters["peak_MiB"] = peak_mib;
     state.counters["bytes_per_band_voxel"] = peak_mib * 1024.0 * 1024.0 / band;
 }

@@ -75,8 +75,9 @@ int main(int argc, char** argv) {
         PipelineOptions po;
         po.smoothing = false;
         po.scan.resolution = res;
-        PipelineReport rep;
-        const Mesh out = smooth_mesh(m, po, &rep);
+        const PipelineResult out_result = smooth_mesh(m, po);
+        const PipelineReport& rep = out_result.report;
+        const Mesh& out = out_result.mesh;
         const ScanConvertReport& sr = rep.scan;
         std::printf("| stage | seconds |\n|---|---|\n");
         std::printf("| subdivide (not counted) | %.2f |\n", t_sub);
@@ -103,8 +104,9 @@ int main(int argc, char** argv) {
             PipelineOptions ob;
             ob.smoothing = false;
             ob.scan.resolution = r;
-            PipelineReport pb;
-            const Mesh eb = smooth_mesh(base, ob, &pb);
+            const PipelineResult eb_result = smooth_mesh(base, ob);
+            const PipelineReport& pb = eb_result.report;
+            const Mesh& eb = eb_result.mesh;
             const ScanConvertReport& rb = pb.scan;
             const double ts = pb.seconds.voxelize, te = pb.seconds.extract;
             const double dense = double(rb.grid.sample_count()) * 4.0 / 1048576.0;

@@ -110,9 +110,10 @@ int main(int argc, char** argv) {
             PipelineOptions po;
             po.scan.resolution = resolution;
             po.smoothing = false;
-            PipelineReport pr;
             auto t0 = std::chrono::steady_clock::now();
-            const Mesh ext = smooth_mesh(src, po, &pr);
+            const PipelineResult ext_result = smooth_mesh(src, po);
+            const PipelineReport& pr = ext_result.report;
+            const Mesh& ext = ext_result.mesh;
             r.extract_s = since(t0);
             r.h = pr.scan.grid.voxel_size;
             const fs::path ext_path = out / (stem + "_extract.ply");

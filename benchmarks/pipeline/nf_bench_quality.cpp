@@ -139,15 +139,16 @@ int main(int argc, char** argv) {
             if (selected("floor")) {  // the ground truth through scan conversion and extraction only
                 PipelineOptions pf = po;
                 pf.smoothing = false;
-                row("gt-voxel", smooth_mesh(truth, pf), 0.0);
+                row("gt-voxel", smooth_mesh(truth, pf).mesh, 0.0);
             }
             for (const auto& [key, mode] : {std::pair{"iso", SmoothMode::Isotropic},
                                              std::pair{"aniso", SmoothMode::Anisotropic}}) {
                 if (!selected(key)) continue;
                 PipelineOptions pm = po;
                 pm.smooth.mode = mode;
-                PipelineReport pr;
-                const Mesh m = smooth_mesh(noisy, pm, &pr);
+                const PipelineResult m_result = smooth_mesh(noisy, pm);
+                const PipelineReport& pr = m_result.report;
+                const Mesh& m = m_result.mesh;
                 const double secs = pr.seconds.smooth + pr.seconds.extract;
                 const SmoothReport& rep = pr.smooth;
                 row(to_string(mode), m, secs);
@@ -155,9 +156,9 @@ int main(int argc, char** argv) {
                     fs::create_directories(out);
                     write_mesh((out / (p.noisy.stem().string() + "_" + key + ".ply")).string(), m);
                 }
-                if (!rep.mu.empty()) {
+                if (mode == SmoothMode::Anisotropic) {
                     std::printf("%-28s %-11s mu per iteration:", p.name.c_str(), "");
-                    for (const float m : rep.mu) std::printf(" %.3f", double(m));
+                    for (const SmoothIteration& it : rep.iterations) std::printf(" %.3f", double(it.mu));
                     std::printf("\n");
                 }
             }

@@ -132,7 +132,7 @@ Mesh normalflow_smooth(const Mesh& m, int resolution, SmoothMode mode, int threa
     o.scan.threads = threads;
     o.smooth.mode = mode;
     o.smooth.threads = threads;
-    return smooth_mesh(m, o);
+    return smooth_mesh(m, o).mesh;
 }
 
 double now_ms() {

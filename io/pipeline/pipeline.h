@@ -91,6 +91,12 @@ struct PipelineReport {
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order
 };
 
+/// What smooth_mesh returns: the result and the report of the run.
+struct PipelineResult {
+    Mesh mesh;
+    PipelineReport report;
+};
+
 /// Smooths a triangle mesh through its signed distance volume: repairs a copy of m (optional),
 /// scan-converts it (scan_convert) into a narrow band of max(scan.half_width,
 /// kSmoothingScanBandVoxels) voxels, filters the normal map and refits (smooth_volume, Tasdizen
@@ -106,8 +112,7 @@ struct PipelineReport {
 ///        NumericalError, Cancelled as the stages throw them.
 /// Messages do not name the input; a caller that has a file name prefixes it.
 /// Threading: scan.threads and smooth.threads; the result does not depend on them.
-Mesh smooth_mesh(const Mesh& m, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
-                 Progress* progress = nullptr);
+PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& options = {}, Progress* progress = nullptr);
 
 /// The first half of smooth_mesh: validation, repair, memory check and scan conversion. When
 /// options.smoothing, the band is at least kSmoothingScanBandVoxels and the memory check counts the

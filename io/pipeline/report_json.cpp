@@ -1,5 +1,7 @@
 #include "io/pipeline/report_json.h"
 
+#include <vector>
+
 namespace normalflow {
 
 Json to_json(const RepairReport& r) {
@@ -25,14 +27,35 @@ Json to_json(const ScanConvertReport& r) {
 }
 
 Json to_json(const SmoothReport& r) {
+    // Per-iteration records as one array per field (the CLI's --json contract since the first
+    // release; scripts index them by iteration).
+    std::vector<double> seconds, g0, g1, d0, d1;
+    std::vector<std::size_t> band, allocated;
+    std::vector<int> steps;
+    std::vector<float> mu;
+    for (const SmoothIteration& it : r.iterations) {
+        seconds.push_back(it.seconds);
+        band.push_back(it.band_voxels);
+        allocated.push_back(it.allocated_voxels);
+        if (!it.normal_energy.empty()) {  // mean curvature flow has no normal loop and no refit
+            g0.push_back(it.normal_energy_start());
+            g1.push_back(it.normal_energy_end());
+        }
+        if (!it.refit_energy.empty()) {
+            d0.push_back(it.refit_energy_start());
+            d1.push_back(it.refit_energy_end);
+            steps.push_back(it.refit_steps);
+        }
+        if (it.mu > 0) mu.push_back(it.mu);
+    }
     Json j = Json::object();
-    j.set("iterations", r.iterations).set("seconds_per_iteration", Json::array(r.seconds_per_iteration))
-        .set("band_voxels", Json::array(r.band_voxels)).set("allocated_voxels", Json::array(r.allocated_voxels))
-        .set("normal_energy_start", Json::array(r.normal_energy_start))
-        .set("normal_energy", Json::array(r.normal_energy))
-        .set("refit_energy_start", Json::array(r.refit_energy_start))
-        .set("refit_energy", Json::array(r.refit_energy)).set("refit_steps", Json::array(r.refit_steps));
-    if (!r.mu.empty()) j.set("mu", Json::array(r.mu));
+    j.set("iterations", r.iterations_run()).set("seconds_per_iteration", Json::array(seconds))
+        .set("band_voxels", Json::array(band)).set("allocated_voxels", Json::array(allocated))
+        .set("normal_energy_start", Json::array(g0))
+        .set("normal_energy", Json::array(g1))
+        .set("refit_energy_start", Json::array(d0))
+        .set("refit_energy", Json::array(d1)).set("refit_steps", Json::array(steps));
+    if (!mu.empty()) j.set("mu", Json::array(mu));
     j.set("stopped_unchanged", r.stopped_unchanged).set("seconds_normals", r.seconds_normals)
         .set("seconds_refit", r.seconds_refit).set("seconds_reinit", r.seconds_reinit)
         .set("warnings", Json::array(r.warnings));

@@ -66,8 +66,9 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
         const auto t_it = Clock::now();
         ctl.iteration = it;
         band.build_active(opt.active_band);
-        rep.band_voxels.push_back(band.active_voxels());
-        rep.allocated_voxels.push_back(band.nblocks() * kBlockVoxels);
+        SmoothIteration& record = rep.iterations.emplace_back();
+        record.band_voxels = band.active_voxels();
+        record.allocated_voxels = band.nblocks() * kBlockVoxels;
         if (filter) {
             const auto t0 = Clock::now();
             filter->filter_normals(c);
@@ -88,15 +89,14 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
         // stop in the first iteration): the surface did not move, so neither does the band.
         // (Reinitialising the unchanged φ and going on would only let the interface samples'
         // φ/|∇φ| drift a little each time.)
-        const bool unchanged = filter && rep.refit_steps.back() == 0;
+        const bool unchanged = filter && record.refit_steps == 0;
         const auto t2 = Clock::now();
         if (!(unchanged && band.reinit_limit() >= kHalfWidth)) {
             band.update_band();
             band.reinitialise(it + 1 < opt.iterations && !unchanged ? working_limit(opt) : kHalfWidth, ctl);
         }
         rep.seconds_reinit += seconds_since(t2);
-        rep.seconds_per_iteration.push_back(seconds_since(t_it));
-        rep.iterations = it + 1;
+        record.seconds = seconds_since(t_it);
         if (unchanged && it + 1 < opt.iterations) {
             rep.stopped_unchanged = true;
             ctl.finish();
@@ -123,24 +123,7 @@ void validate(const Volume& v, const SmoothOptions& opt) {
     if (!(opt.active_band >= 1.5f && opt.active_band <= 5.0f))
         bad("active_band must be in [1.5, 5] voxels, got " + std::to_string(opt.active_band));
     if (opt.threads < 0) bad("threads must be >= 0, got " + std::to_string(opt.threads));
-    if (!(v.grid.voxel_size > 0.0) || !std::isfinite(v.grid.voxel_size)) bad("volume voxel_size must be > 0");
-    for (int a = 0; a < 3; ++a) {
-        if (v.grid.dims[a] < 1) bad("volume dims must be >= 1");
-        if (v.block_dims[a] != (v.grid.dims[a] + kBlockDim - 1) / kBlockDim) bad("volume block_dims do not match dims");
-    }
-    if (v.block_table.size() != std::size_t(v.block_dims[0]) * v.block_dims[1] * v.block_dims[2])
-        bad("volume block_table has " + std::to_string(v.block_table.size()) + " entries, expected " +
-            std::to_string(std::size_t(v.block_dims[0]) * v.block_dims[1] * v.block_dims[2]));
-    if (v.values.size() != v.block_coords.size() * kBlockVoxels)
-        bad("volume values has " + std::to_string(v.values.size()) + " samples, expected 512 per block");
-    for (std::size_t b = 0; b < v.block_coords.size(); ++b) {
-        const auto& c = v.block_coords[b];
-        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= v.block_dims[0] || c[1] >= v.block_dims[1] ||
-            c[2] >= v.block_dims[2] || v.block_table[v.table_index(c[0], c[1], c[2])] != std::int32_t(b))
-            bad("volume block " + std::to_string(b) + " does not match its block_table entry");
-    }
-    for (const float x : v.values)
-        if (!std::isfinite(x)) throw NumericalError("smooth_volume: the input volume holds a NaN/Inf sample");
+    v.check("smooth_volume");  // the volume's own invariants (lib/core/volume.h)
 }
 
 }  // namespace

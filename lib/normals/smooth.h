@@ -81,31 +81,40 @@ struct SmoothOptions {
 /// 8 for Isotropic, HighBoost and MeanCurvature.
 int default_iterations(SmoothMode mode);
 
-/// What smooth_volume did.
+/// What one main iteration of smooth_volume did (energies in voxel units).
+struct SmoothIteration {
+    std::vector<double> normal_energy;  ///< G before each normal-loop step and after the last
+                                        ///< (normal_steps + 1 values; empty for MeanCurvature)
+    std::vector<double> refit_energy;   ///< D of each refit iterate evaluated: before each step, plus
+                                        ///< the result when the refit ran refit_max_steps (empty for
+                                        ///< MeanCurvature)
+    double refit_energy_end = 0;        ///< D at the end of the refit: the smallest D seen (a last step
+                                        ///< that raised D is undone)
+    int refit_steps = 0;                ///< refit steps kept
+    float mu = 0;                       ///< Anisotropic: the conductance scale µ used (1/voxel); 0 for
+                                        ///< the other modes
+    std::size_t band_voxels = 0;        ///< samples processed (the active band)
+    std::size_t allocated_voxels = 0;   ///< samples held in allocated blocks
+    double seconds = 0;                 ///< wall seconds of the whole main iteration
+
+    double normal_energy_start() const { return normal_energy.empty() ? 0.0 : normal_energy.front(); }
+    double normal_energy_end() const { return normal_energy.empty() ? 0.0 : normal_energy.back(); }
+    double refit_energy_start() const { return refit_energy.empty() ? 0.0 : refit_energy.front(); }
+};
+
+/// What smooth_volume did: one record per main iteration run, and the totals.
 struct SmoothReport {
-    int iterations = 0;                       ///< main iterations run
-    std::vector<double> normal_energy_start;  ///< G at the start of each normal loop (voxel units)
-    std::vector<double> normal_energy;        ///< G at the end of each normal loop
-    std::vector<std::vector<double>> normal_energy_steps;  ///< per main iteration: G before each step and after the last
-    std::vector<double> refit_energy_start;   ///< D at the start of each refit (voxel units, Σ over the active band)
-    std::vector<double> refit_energy;         ///< D at the end of each refit (the smallest D seen:
-                                              ///< a last step that raised D is undone)
-    std::vector<std::vector<double>> refit_energy_steps;   ///< per main iteration: D of each refit iterate
-                                              ///< (before each step; plus the result when the refit
-                                              ///< ran refit_max_steps)
-    std::vector<float> mu;                    ///< Anisotropic: conductance scale µ used per main iteration (1/voxel)
-    std::vector<int> refit_steps;             ///< refit steps kept per main iteration
-    std::vector<std::size_t> band_voxels;     ///< samples processed (active band) per main iteration
-    std::vector<std::size_t> allocated_voxels;  ///< samples held in allocated blocks per main iteration
-    std::vector<double> seconds_per_iteration;  ///< wall seconds of each main iteration
+    std::vector<SmoothIteration> iterations;  ///< one per main iteration run, in order
     bool stopped_unchanged = false;  ///< true when smooth_volume stopped before the requested iterations
                                      ///< because a refit kept no step: φ was then exactly what that
                                      ///< iteration started from, and every later iteration would
-                                     ///< have repeated it bit for bit (iterations tells which)
+                                     ///< have repeated it bit for bit (iterations.size() tells which)
     double seconds_normals = 0;  ///< total wall seconds in the normal loop (incl. normals, pre-smoothing)
     double seconds_refit = 0;    ///< total wall seconds in the refit (incl. H_N) or the curvature flow
     double seconds_reinit = 0;   ///< total wall seconds moving the band and reinitialising φ
     std::vector<std::string> warnings;
+
+    int iterations_run() const { return int(iterations.size()); }
 };
 
 /// Smooths the surface {φ = 0} of a signed distance volume by the method of Tasdizen et al. 2003.

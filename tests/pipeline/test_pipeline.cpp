@@ -44,8 +44,9 @@ std::string message_of(F&& f) {
 TEST(Pipeline, SphereGivesAClosedManifoldMeshNearTheInput) {
     const double r = 1.0;
     const Mesh sphere = test::icosphere(r, 3);
-    PipelineReport rep;
-    const Mesh out = smooth_mesh(sphere, quick_options(), &rep);
+    const PipelineResult res = smooth_mesh(sphere, quick_options());
+    const PipelineReport& rep = res.report;
+    const Mesh& out = res.mesh;
     const MeshReport mr = mesh_report(out);
     EXPECT_TRUE(mr.closed);
     EXPECT_TRUE(mr.manifold);
@@ -57,7 +58,7 @@ TEST(Pipeline, SphereGivesAClosedManifoldMeshNearTheInput) {
     EXPECT_NEAR(mr.volume, 4.0 / 3.0 * 3.14159265358979 * r * r * r, 0.15);
     EXPECT_TRUE(rep.repaired || !rep.warnings.empty());  // without CGAL: the "repair skipped" warning
     EXPECT_TRUE(rep.smoothed);
-    EXPECT_EQ(rep.smooth.iterations, 3);
+    EXPECT_EQ(rep.smooth.iterations_run(), 3);
     EXPECT_EQ(rep.extract.triangles, out.triangles.size());
     EXPECT_GT(rep.seconds.total, 0);
     EXPECT_GE(rep.seconds.total, rep.seconds.voxelize + rep.seconds.smooth + rep.seconds.extract - 1e-9);
@@ -67,7 +68,7 @@ TEST(Pipeline, HalvesComposeToTheWhole) {
     const Mesh sphere = test::icosphere(1.0, 2);
     PipelineOptions o = quick_options();
     o.smoothing = false;
-    const Mesh whole = smooth_mesh(sphere, o);
+    const Mesh whole = smooth_mesh(sphere, o).mesh;
     const Volume v = mesh_to_volume(sphere, o);
     const Mesh halves = volume_to_mesh(v, o);
     EXPECT_EQ(whole.positions, halves.positions);
@@ -195,8 +196,7 @@ TEST(Pipeline, EmptyVolumeMessages) {
 }
 
 TEST(Pipeline, ReportJsonHasEveryStage) {
-    PipelineReport rep;
-    (void)smooth_mesh(test::icosphere(1.0, 2), quick_options(), &rep);
+    const PipelineReport rep = smooth_mesh(test::icosphere(1.0, 2), quick_options()).report;
     const std::string j = to_json(rep).dump();
     for (const char* key : {"\"voxelize\"", "\"band_half_width\"", "\"smooth\"", "\"stopped_unchanged\"", "\"mu\"",
                             "\"extract\"", "\"seconds\"", "\"total\"", "\"warnings\"", "\"distance\":\"bvh\""})
@@ -215,7 +215,7 @@ TEST(Pipeline, CliSmoothEqualsLibrary) {
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     PipelineOptions o = quick_options();
     o.smooth.mode = SmoothMode::Isotropic;
-    const Mesh lib = smooth_mesh(input, o);
+    const Mesh lib = smooth_mesh(input, o).mesh;
     const Mesh cli = read_mesh(out);
     ASSERT_EQ(cli.positions.size(), lib.positions.size());
     EXPECT_EQ(cli.positions, lib.positions);

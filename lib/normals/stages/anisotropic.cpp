@@ -108,7 +108,7 @@ float conductance_scale(StageContext& c, const Field3& raw, const Field3& presmo
     if (!(c.opt.mu_robust > 0.0f)) return c.opt.mu;
     const float sigma = std::min(curvature_noise_scale(c.band, presmoothed), curvature_noise_scale(c.band, raw));
     float mu = std::max(c.opt.mu, c.opt.mu_robust * sigma);
-    if (!c.rep.mu.empty()) mu = std::min(mu, c.rep.mu.back());
+    if (const SmoothIteration* last = c.previous()) mu = std::min(mu, last->mu);
     return mu;
 }
 
@@ -130,9 +130,9 @@ public:
             }
             const float mu = conductance_scale(c, w.normals, w.normals_aux);
             conductance_from(c, loop_, w.normals_aux, mu, pad_g_);
-            c.rep.mu.push_back(mu);
+            c.record().mu = mu;
         } else {
-            c.rep.mu.push_back(c.opt.mu);
+            c.record().mu = c.opt.mu;
         }
         loop_.run(c, cond, pad_g_);
     }

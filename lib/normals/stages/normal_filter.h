@@ -18,7 +18,7 @@ public:
     virtual ~NormalFilter() = default;
     /// N from φ, then the filter's normal loop; the result in c.band.work().normals (the active
     /// samples filtered, the others N). Uses work().normals_next and work().normals_aux; reports
-    /// the normal energies (and the anisotropic µ) to c.rep.
+    /// the normal energies (and the anisotropic µ) to c.record().
     virtual void filter_normals(StageContext& c) = 0;
 };
 

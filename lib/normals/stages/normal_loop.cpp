@@ -173,9 +173,7 @@ void NormalLoop::run(StageContext& c, FaceWeight w, const PaddedFaces* g) {
         c.ctl.tick(0.5 * double(s + 1) / c.opt.normal_steps);
     }
     gs.push_back(step(c, n, n2, w, false, g));
-    c.rep.normal_energy_start.push_back(gs.front());
-    c.rep.normal_energy.push_back(gs.back());
-    c.rep.normal_energy_steps.push_back(std::move(gs));
+    c.record().normal_energy = std::move(gs);
 }
 
 void NormalLoop::prepare(StageContext& c) {

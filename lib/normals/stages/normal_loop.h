@@ -33,7 +33,7 @@ public:
                 const PaddedFaces* g = nullptr);
 
     /// normal_steps steps on work().normals (ping-pong with work().normals_next), the energy G
-    /// before each and after the last into c.rep.
+    /// before each and after the last into c.record().
     void run(StageContext& c, FaceWeight w, const PaddedFaces* g = nullptr);
 
     /// φ of active block k (its index in band.active()) with its halo, after prepare.

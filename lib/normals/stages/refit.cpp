@@ -199,10 +199,10 @@ void refit_to_normals(StageContext& c) {
         d_end = refit_energy(c);
         ds.push_back(d_end);
     }
-    c.rep.refit_energy_start.push_back(ds.front());
-    c.rep.refit_energy.push_back(d_end);
-    c.rep.refit_energy_steps.push_back(std::move(ds));
-    c.rep.refit_steps.push_back(steps);
+    SmoothIteration& r = c.record();
+    r.refit_energy = std::move(ds);
+    r.refit_energy_end = d_end;
+    r.refit_steps = steps;
 }
 
 }  // namespace normalflow::engine

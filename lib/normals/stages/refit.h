@@ -10,7 +10,7 @@ namespace normalflow::engine {
 
 /// H_N = ∇·N of band.work().normals [− T ∇·(G N), SmoothOptions::second_order_term] into
 /// work().hn, then refit steps until D stops decreasing; φ ends as the iterate with the smallest D
-/// seen. Reports D and the steps kept to c.rep. Uses work().phi_next and work().spare().
+/// seen. Reports D and the steps kept to c.record(). Uses work().phi_next and work().spare().
 void refit_to_normals(StageContext& c);
 
 /// One explicit step φ ← φ + dt |∇φ|_upwind (H_φ − work().hn) on the active samples (φ →
