@@ -37,8 +37,13 @@ struct SmoothArgs {
 
 /// Flags of voxelize and smooth, straight into PipelineOptions (its defaults are the help's).
 void add_grid_options(CLI::App* cmd, PipelineOptions& p) {
-    cmd->add_option("--resolution", p.scan.resolution, "voxels along the longest bounding-box side")
-        ->check(CLI::Range(8, 8192))->capture_default_str();
+    auto* res = cmd->add_option("--resolution", p.scan.resolution,
+                                p.scan.resolution == 0
+                                    ? "voxels along the longest bounding-box side (default: automatic, 5 per median "
+                                      "edge length of the input, 128 to 512, within the memory available)"
+                                    : "voxels along the longest bounding-box side")
+                    ->check(CLI::Range(8, 8192));
+    if (p.scan.resolution != 0) res->capture_default_str();
     cmd->add_option("--voxel-size", p.scan.voxel_size, "voxel size in world units (overrides --resolution)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--shell", p.scan.shell_thickness,
@@ -237,21 +242,33 @@ void add_extract_command(CLI::App& app) {
 void add_smooth_command(CLI::App& app) {
     auto a = std::make_shared<SmoothArgs>();
     SmoothOptions& s = a->pipeline.smooth;
+    a->pipeline.scan.resolution = 0;  // automatic (io/pipeline auto_resolution)
     auto* cmd = app.add_subcommand("smooth", "voxelize, filter the normal map and refit, extract (the whole pipeline)");
     cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
     cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
     add_grid_options(cmd, a->pipeline);
     std::map<std::string, SmoothMode> modes;
-    for (SmoothMode m : {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature})
+    for (SmoothMode m : {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature,
+                         SmoothMode::Bilateral, SmoothMode::Guided})
         modes[to_string(m)] = m;
-    add_enum_option(cmd, "--mode", s.mode, modes, "isotropic | anisotropic | highboost | mcf");
+    add_enum_option(cmd, "--mode", s.mode, modes, "isotropic | anisotropic | highboost | mcf | bilateral | guided");
     cmd->add_option("--iterations", s.iterations,
                     "main iterations (normal loop + refit); default: " +
                         std::to_string(default_iterations(SmoothMode::Anisotropic)) + " for anisotropic, " +
                         std::to_string(default_iterations(SmoothMode::Isotropic)) + " for the other modes")
         ->check(CLI::Range(1, 10000));
-    cmd->add_option("--normal-steps", s.normal_steps, "normal-loop steps per main iteration")
-        ->check(CLI::Range(1, 10000))->capture_default_str();
+    cmd->add_option("--normal-steps", s.normal_steps,
+                    "normal-loop steps (bilateral, guided: filter passes) per main iteration; default: " +
+                        std::to_string(default_normal_steps(SmoothMode::Anisotropic)) + ", " +
+                        std::to_string(default_normal_steps(SmoothMode::Bilateral)) + " for bilateral and guided")
+        ->check(CLI::Range(1, 10000));
+    cmd->add_option("--length-scale", a->pipeline.length_scale,
+                    "bilateral, guided: the model's length unit in world units (default: the input's median edge length)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--sigma-spatial", s.sigma_spatial, "bilateral, guided: spatial sigma in length units")
+        ->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--sigma-range", s.sigma_range, "bilateral, guided: range sigma on the normals' chord")
+        ->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--mu", s.mu, "anisotropic conductance scale, 1/voxel")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--alpha", s.alpha, "high-boost amount")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--presmooth", s.conductance_presmooth_steps,
@@ -260,6 +277,13 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--mu-robust", s.mu_robust,
                     "anisotropic: raise mu to C times the robust noise scale of the curvature (0: the fixed mu)")
         ->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--refit-steps", s.refit_max_steps,
+                    "refit steps per main iteration at most (default: 40; bilateral, guided: a refit time of 1.4 length units squared)")
+        ->check(CLI::Range(1, 100000));
+    cmd->add_option("--refit-dt", s.refit_dt, "refit time step, voxel² (at most 1/6)")
+        ->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_flag("!--no-preserve-volume", s.preserve_volume,
+                  "bilateral, guided: do not shift the surface back to the volume it had before each refit");
     cmd->add_flag("--second-order", s.second_order_term, "add Appendix A's second term (Eq. 39) to the refit");
     cmd->add_option("--target-faces", a->pipeline.target_faces,
                     "decimate the result to at most N faces (CGAL edge collapse)")

@@ -1,5 +1,5 @@
 // nf_bench_study [DATA_DIR] [--samples N] [--resolution R] [--threads T] [--only SUBSTRING]...
-//                [--no-normalflow] [--modes iso,aniso] [--csv FILE] [--md FILE]
+//                [--no-normalflow] [--modes aniso,bilateral,default] [--csv FILE] [--md FILE]
 // The comparison study of issue 6 on every noisy/ground-truth pair of shared/data: pairs_gnf, pairs_gcn
 // and pairs_nllr (DATA_DIR is shared/data). For each noisy mesh:
 //   - the noisy input itself;
@@ -128,7 +128,7 @@ std::vector<Pair> find_pairs(const fs::path& data) {
 /// conversion at `resolution`, smooth_volume with the defaults, extraction).
 Mesh normalflow_smooth(const Mesh& m, int resolution, SmoothMode mode, int threads) {
     PipelineOptions o;
-    o.scan.resolution = resolution;
+    o.scan.resolution = resolution;  // 0: automatic (auto_resolution)
     o.scan.threads = threads;
     o.smooth.mode = mode;
     o.smooth.threads = threads;
@@ -147,7 +147,9 @@ int main(int argc, char** argv) {
     std::vector<std::string> only;
     int resolution = 256, threads = 0;
     bool with_normalflow = true;
-    std::string modes = "iso,aniso";  // normalflow modes of the study rows
+    // normalflow rows: iso, aniso, bilateral, guided at --resolution; default: the pipeline's defaults
+    // (PipelineOptions{}: its mode and the automatic resolution), what `normalflow smooth IN OUT` runs
+    std::string modes = "aniso,bilateral,default";
     CompareOptions co;
     co.sampling.samples = 50000;
     for (int i = 1; i < argc; ++i) {
@@ -237,13 +239,32 @@ int main(int argc, char** argv) {
             add("bilateral normal", "20+10 it., σr=0.35", now_ms() - t0, bil);
 
             if (with_normalflow) {
-                for (const SmoothMode mode : {SmoothMode::Isotropic, SmoothMode::Anisotropic}) {
-                    if (("," + modes + ",").find(mode == SmoothMode::Isotropic ? ",iso," : ",aniso,") == std::string::npos)
-                        continue;
+                const std::string list = "," + modes + ",";
+                const auto wanted = [&](const char* token) {
+                    std::string t(",");
+                    t += token;
+                    t += ',';
+                    return list.find(t) != std::string::npos;
+                };
+                const std::pair<const char*, SmoothMode> study_modes[] = {
+                    {"iso", SmoothMode::Isotropic}, {"aniso", SmoothMode::Anisotropic},
+                    {"bilateral", SmoothMode::Bilateral}, {"guided", SmoothMode::Guided}};
+                for (const auto& [token, mode] : study_modes) {
+                    if (!wanted(token)) continue;
                     t0 = now_ms();
                     const Mesh m = normalflow_smooth(noisy, resolution, mode, threads);
                     add(std::string("normalflow ") + to_string(mode), "R=" + std::to_string(resolution) + ", defaults",
                         now_ms() - t0, m);
+                }
+                if (wanted("default")) {
+                    t0 = now_ms();
+                    const PipelineOptions defaults;
+                    PipelineOptions o = defaults;
+                    o.scan.resolution = 0;
+                    o.scan.threads = o.smooth.threads = threads;
+                    const PipelineResult res = smooth_mesh(noisy, o);
+                    add(std::string("normalflow default (") + to_string(defaults.smooth.mode) + ")",
+                        "R=auto " + std::to_string(res.report.scan_options.resolution), now_ms() - t0, res.mesh);
                 }
             }
             for (const auto& [label, path] : p.published) add(label, "", 0, read_mesh(path.string()));

@@ -51,7 +51,7 @@ const char* to_string(DistanceQuery q) {
 void validate(const PipelineOptions& o) {
     const ScanConvertOptions& s = o.scan;
     if (!(s.voxel_size >= 0) || !std::isfinite(s.voxel_size)) bad_option("scan.voxel_size", str(s.voxel_size), ">= 0");
-    if (s.voxel_size == 0 && s.resolution < 1) bad_option("scan.resolution", str(s.resolution), ">= 1");
+    if (s.voxel_size == 0 && s.resolution < 0) bad_option("scan.resolution", str(s.resolution), ">= 1, or 0 (automatic)");
     if (!(s.half_width >= 1) || !std::isfinite(s.half_width)) bad_option("scan.half_width", str(s.half_width), ">= 1");
     if (!(s.shell_thickness >= 0) || !std::isfinite(s.shell_thickness))
         bad_option("scan.shell_thickness", str(s.shell_thickness), ">= 0");
@@ -59,7 +59,15 @@ void validate(const PipelineOptions& o) {
     if (o.smoothing) {
         const SmoothOptions& m = o.smooth;
         if (m.iterations < 0) bad_option("smooth.iterations", str(m.iterations), ">= 0");
-        if (m.normal_steps < 1) bad_option("smooth.normal_steps", str(m.normal_steps), ">= 1");
+        if (m.normal_steps < 0) bad_option("smooth.normal_steps", str(m.normal_steps), ">= 0");
+        if (!(m.length_scale >= 0) || !std::isfinite(m.length_scale))
+            bad_option("smooth.length_scale", str(m.length_scale), ">= 0");
+        if (!(m.sigma_spatial > 0) || !std::isfinite(m.sigma_spatial))
+            bad_option("smooth.sigma_spatial", str(m.sigma_spatial), "> 0");
+        if (!(m.sigma_range > 0) || !std::isfinite(m.sigma_range))
+            bad_option("smooth.sigma_range", str(m.sigma_range), "> 0");
+        if (!(o.length_scale >= 0) || !std::isfinite(o.length_scale))
+            bad_option("length_scale", str(o.length_scale), ">= 0");
         if (!(m.mu > 0) || !std::isfinite(m.mu)) bad_option("smooth.mu", str(m.mu), "> 0");
         if (!(m.alpha >= 0) || !std::isfinite(m.alpha)) bad_option("smooth.alpha", str(m.alpha), ">= 0");
         if (m.conductance_presmooth_steps < 0)
@@ -104,8 +112,30 @@ double check_memory(const Mesh& mesh, const PipelineOptions& o) {
     return need;
 }
 
-Volume mesh_to_volume(const Mesh& input, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
-    validate(o);
+int auto_resolution(const Mesh& mesh, const PipelineOptions& options) {
+    if (mesh.triangles.empty()) return kAutoResolutionMin;
+    const Box3d box = bounding_box(mesh);
+    const Vec3d size = box.max - box.min;
+    const double longest = std::max({size.x, size.y, size.z});
+    const double ell = options.length_scale > 0 ? options.length_scale : model_length_scale(mesh);
+    double r = ell > 0 && longest > 0 ? std::ceil(kAutoVoxelsPerLength * longest / ell) : kAutoResolutionMin;
+    int res = int(std::clamp(r, double(kAutoResolutionMin), double(kAutoResolutionMax)));
+    PipelineOptions o = options;
+    o.scan.voxel_size = 0;
+    for (; res > kAutoResolutionMin; res = std::max(kAutoResolutionMin, int(res * 0.9))) {
+        o.scan.resolution = res;
+        try {
+            check_memory(mesh, o);
+            break;
+        } catch (const OutOfMemory&) {
+        }
+    }
+    return res;
+}
+
+Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, PipelineReport* report, Progress* progress) {
+    validate(options);
+    PipelineOptions o = options;
     PipelineReport local;
     PipelineReport& r = report ? *report : local;
     Stopwatch clock;
@@ -124,6 +154,7 @@ Volume mesh_to_volume(const Mesh& input, const PipelineOptions& o, PipelineRepor
 #endif
     }
     r.seconds.repair = clock.lap();
+    if (o.scan.voxel_size == 0 && o.scan.resolution == 0) o.scan.resolution = auto_resolution(*mesh, o);
     r.memory_estimate_bytes = check_memory(*mesh, o);
     detail::begin(progress, "voxelize");
     r.scan_options = effective_scan_options(o);
@@ -176,13 +207,34 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
     return m;
 }
 
+double model_length_scale(const Mesh& m) {
+    std::vector<double> len;
+    len.reserve(m.triangles.size() * 3);
+    for (const auto& t : m.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const auto d = m.positions[std::size_t(t[(k + 1) % 3])] - m.positions[std::size_t(t[k])];
+            len.push_back(std::sqrt(double(dot(d, d))));
+        }
+    if (len.empty()) return 0;
+    auto mid = len.begin() + std::ptrdiff_t(len.size() / 2);
+    std::nth_element(len.begin(), mid, len.end());
+    return *mid;
+}
+
 PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* progress) {
     PipelineResult result;
     PipelineReport& r = result.report;
     Volume v = mesh_to_volume(m, o, &r, progress);
     if (o.smoothing) {
         Stopwatch clock;
-        r.smooth = smooth_volume(v, o.smooth, progress);
+        SmoothOptions so = o.smooth;
+        if (so.length_scale == 0) {
+            r.length_scale = o.length_scale > 0 ? o.length_scale : model_length_scale(m);
+            so.length_scale = float(r.length_scale / v.grid.voxel_size);
+        } else {
+            r.length_scale = double(so.length_scale) * v.grid.voxel_size;
+        }
+        r.smooth = smooth_volume(v, so, progress);
         r.smoothed = true;
         append(r.warnings, r.smooth.warnings);
         r.seconds.smooth = clock.lap();

@@ -39,9 +39,16 @@ inline constexpr float kSmoothingScanBandVoxels = 3.0f;
 /// estimate of a smoothing run uses it.
 inline constexpr float kEngineBandVoxels = 8.0f;
 
+/// scan.resolution = 0 (and no voxel size): the resolution is chosen from the input,
+/// kAutoVoxelsPerLength voxels per model length unit along the longest side, clamped to
+/// [kAutoResolutionMin, kAutoResolutionMax] and lowered until the memory estimate fits.
+inline constexpr double kAutoVoxelsPerLength = 5.0;
+inline constexpr int kAutoResolutionMin = 128;
+inline constexpr int kAutoResolutionMax = 512;
+
 /// Options of smooth_mesh (and of its halves, mesh_to_volume and volume_to_mesh).
 struct PipelineOptions {
-    /// Scan conversion: resolution or voxel size, band half-width (raised to
+    /// Scan conversion: resolution (0: automatic, auto_resolution) or voxel size, band half-width (raised to
     /// kSmoothingScanBandVoxels when smoothing), shell thickness, threads.
     ScanConvertOptions scan;
     /// Repair the mesh first (io/cgal repair_mesh: merge points, drop degenerate and duplicate
@@ -51,8 +58,14 @@ struct PipelineOptions {
     DistanceQuery distance = DistanceQuery::EngineBvh;
     /// Run smooth_volume between scan conversion and extraction (false: voxelize and extract only).
     bool smoothing = true;
-    /// The engine's options (mode, iterations, ...); used when smoothing.
-    SmoothOptions smooth;
+    /// The engine's options (mode, iterations, ...); used when smoothing. Its length_scale, when
+    /// 0, is set from length_scale below. The pipeline's default mode is Bilateral (the engine's
+    /// own default, Anisotropic, is the paper's): benchmarks/README.md, "Normal filters beyond
+    /// the paper", has the study that chose it.
+    SmoothOptions smooth{.mode = SmoothMode::Bilateral};
+    /// World units, >= 0: the model's length unit for the engine (SmoothOptions::length_scale);
+    /// 0: the median edge length of the input (model_length_scale).
+    double length_scale = 0;
     /// Extraction of the zero level set.
     ExtractOptions extract;
     /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (CGAL edge collapse,
@@ -81,6 +94,7 @@ struct PipelineReport {
     ScanConvertOptions scan_options;  ///< the scan conversion's options as run (band rule applied)
     double memory_estimate_bytes = 0; ///< estimated peak of the run (see check_memory)
     ScanConvertReport scan;
+    double length_scale = 0;     ///< world units: the model length unit the engine ran with (0: not smoothed)
     bool smoothed = false;       ///< smooth_volume ran
     SmoothReport smooth;         ///< valid when smoothed
     ExtractReport extract;
@@ -125,6 +139,18 @@ Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, Pipeli
 /// \throw InvalidInput if the volume holds no surface.
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                     Progress* progress = nullptr);
+
+/// The median length of the mesh's edges (each triangle's three, so an inner edge counts twice),
+/// world units; 0 for a mesh without triangles. What smooth_mesh takes as the model's length unit
+/// when PipelineOptions::length_scale is 0: the noise of a scan or of a noisy mesh is about an
+/// edge long, and features narrower than an edge are not in the mesh.
+double model_length_scale(const Mesh& m);
+
+/// The resolution smooth_mesh uses for scan.resolution = 0: kAutoVoxelsPerLength × the longest
+/// side of the bounding box / the model length unit (length_scale, or model_length_scale(m)),
+/// within [kAutoResolutionMin, kAutoResolutionMax], lowered by 10% steps while check_memory
+/// refuses it (the last step's refusal is then check_memory's to give).
+int auto_resolution(const Mesh& m, const PipelineOptions& options);
 
 /// Checks every option smooth_mesh uses before any work is done.
 /// \throw InvalidInput naming the field ("scan.resolution = 0: expected >= 1").

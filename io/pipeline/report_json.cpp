@@ -32,8 +32,9 @@ Json to_json(const SmoothReport& r) {
     std::vector<double> seconds, g0, g1, d0, d1;
     std::vector<std::size_t> band, allocated;
     std::vector<int> steps;
-    std::vector<float> mu;
+    std::vector<float> mu, shift;
     for (const SmoothIteration& it : r.iterations) {
+        shift.push_back(it.volume_shift);
         seconds.push_back(it.seconds);
         band.push_back(it.band_voxels);
         allocated.push_back(it.allocated_voxels);
@@ -56,6 +57,7 @@ Json to_json(const SmoothReport& r) {
         .set("refit_energy_start", Json::array(d0))
         .set("refit_energy", Json::array(d1)).set("refit_steps", Json::array(steps));
     if (!mu.empty()) j.set("mu", Json::array(mu));
+    j.set("volume_shift", Json::array(shift));
     j.set("stopped_unchanged", r.stopped_unchanged).set("seconds_normals", r.seconds_normals)
         .set("seconds_refit", r.seconds_refit).set("seconds_reinit", r.seconds_reinit)
         .set("warnings", Json::array(r.warnings));
@@ -105,7 +107,7 @@ Json to_json(const PipelineReport& r) {
     Json vox = to_json(r.scan);
     vox.set("band_half_width", r.scan_options.half_width);
     j.set("voxelize", vox);
-    if (r.smoothed) j.set("smooth", to_json(r.smooth));
+    if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
     j.set("extract", to_json(r.extract));
     if (r.decimated) j.set("decimate", to_json(r.decimate));
     Json s = Json::object();

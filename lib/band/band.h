@@ -79,6 +79,14 @@ public:
 
     // ---- layout
     std::size_t nblocks() const { return coords_.size(); }
+    /// Block coordinates (i, j, k: samples 8i … 8i + 7 along x, …) of allocated block b.
+    const std::array<int, 3>& block_coord(std::size_t b) const { return coords_[b]; }
+    /// The slot of the block at block coordinates (i, j, k): >= 0 when allocated, < 0 when
+    /// unallocated or outside the grid.
+    std::int32_t block_at(int i, int j, int k) const {
+        if (i < 0 || j < 0 || k < 0 || i >= block_dims_[0] || j >= block_dims_[1] || k >= block_dims_[2]) return -1;
+        return table_[tindex(i, j, k)];
+    }
     const Grid& grid() const { return grid_; }
     /// The halo sources of allocated block b (valid after update_band until the next).
     const Neighbourhood& neighbourhood(std::size_t b) const { return nbh_[b]; }

@@ -23,6 +23,7 @@
 #include "normals/stages/normal_filter.h"
 #include "normals/stages/refit.h"
 #include "normals/stages/stage.h"
+#include "normals/stages/volume_constraint.h"
 
 namespace normalflow {
 
@@ -32,6 +33,8 @@ const char* to_string(SmoothMode mode) {
         case SmoothMode::Anisotropic: return "anisotropic";
         case SmoothMode::HighBoost: return "highboost";
         case SmoothMode::MeanCurvature: return "mcf";
+        case SmoothMode::Bilateral: return "bilateral";
+        case SmoothMode::Guided: return "guided";
     }
     return "unknown";
 }
@@ -74,7 +77,10 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
             filter->filter_normals(c);
             rep.seconds_normals += seconds_since(t0);
             const auto t1 = Clock::now();
+            const bool keep = opt.preserve_volume && (opt.mode == SmoothMode::Bilateral || opt.mode == SmoothMode::Guided);
+            const double volume = keep ? active_volume(band) : 0.0;
             refit_to_normals(c);
+            if (keep && record.refit_steps > 0) record.volume_shift = restore_volume(band, volume);
             rep.seconds_refit += seconds_since(t1);
         } else {
             const auto t0 = Clock::now();
@@ -108,14 +114,20 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
 void validate(const Volume& v, const SmoothOptions& opt) {
     auto bad = [](const std::string& m) { throw InvalidInput("smooth_volume: " + m); };
     if (opt.iterations < 0) bad("iterations must be >= 0 (0: the mode's default), got " + std::to_string(opt.iterations));
-    if (opt.normal_steps < 1) bad("normal_steps must be >= 1, got " + std::to_string(opt.normal_steps));
+    if (opt.normal_steps < 0) bad("normal_steps must be >= 0 (0: the mode's default), got " + std::to_string(opt.normal_steps));
+    if (!(opt.length_scale >= 0.0f) || !std::isfinite(opt.length_scale))
+        bad("length_scale must be >= 0, got " + std::to_string(opt.length_scale));
+    if (!(opt.sigma_spatial > 0.0f) || !std::isfinite(opt.sigma_spatial))
+        bad("sigma_spatial must be > 0, got " + std::to_string(opt.sigma_spatial));
+    if (!(opt.sigma_range > 0.0f) || !std::isfinite(opt.sigma_range))
+        bad("sigma_range must be > 0, got " + std::to_string(opt.sigma_range));
     if (!(opt.mu > 0.0f) || !std::isfinite(opt.mu)) bad("mu must be > 0, got " + std::to_string(opt.mu));
     if (!(opt.alpha >= 0.0f) || !std::isfinite(opt.alpha)) bad("alpha must be >= 0, got " + std::to_string(opt.alpha));
     if (!(opt.normal_dt > 0.0f) || !std::isfinite(opt.normal_dt))
         bad("normal_dt must be > 0, got " + std::to_string(opt.normal_dt));
     if (!(opt.refit_dt > 0.0f) || !std::isfinite(opt.refit_dt))
         bad("refit_dt must be > 0, got " + std::to_string(opt.refit_dt));
-    if (opt.refit_max_steps < 1) bad("refit_max_steps must be >= 1, got " + std::to_string(opt.refit_max_steps));
+    if (opt.refit_max_steps < 0) bad("refit_max_steps must be >= 0 (0: the mode's default), got " + std::to_string(opt.refit_max_steps));
     if (!(opt.refit_tolerance >= 0.0)) bad("refit_tolerance must be >= 0");
     if (opt.conductance_presmooth_steps < 0) bad("conductance_presmooth_steps must be >= 0");
     if (!(opt.mu_robust >= 0.0f) || !std::isfinite(opt.mu_robust))
@@ -128,7 +140,25 @@ void validate(const Volume& v, const SmoothOptions& opt) {
 
 }  // namespace
 
-int default_iterations(SmoothMode mode) { return mode == SmoothMode::Anisotropic ? 16 : 8; }
+int default_iterations(SmoothMode mode) {
+    switch (mode) {
+        case SmoothMode::Anisotropic: return 16;
+        case SmoothMode::Bilateral:
+        case SmoothMode::Guided: return kNeighbourhoodIterations;
+        default: return 8;
+    }
+}
+
+int default_refit_steps(const SmoothOptions& opt) {
+    if (opt.mode != SmoothMode::Bilateral && opt.mode != SmoothMode::Guided) return 40;
+    const float ell = opt.length_scale > 0.0f ? opt.length_scale : kDefaultLengthScale;
+    const double steps = std::ceil(double(kNeighbourhoodRefitTime) * ell * ell / std::min(opt.refit_dt, engine::kMaxDt));
+    return int(std::clamp(steps, 40.0, 100000.0));
+}
+
+int default_normal_steps(SmoothMode mode) {
+    return mode == SmoothMode::Bilateral || mode == SmoothMode::Guided ? kNeighbourhoodPasses : 50;
+}
 
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress) {
     validate(v, options);
@@ -141,6 +171,8 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
     auto work = [&] {
         SmoothOptions opt = options;
         if (opt.iterations == 0) opt.iterations = default_iterations(opt.mode);
+        if (opt.normal_steps == 0) opt.normal_steps = default_normal_steps(opt.mode);
+        if (opt.refit_max_steps == 0) opt.refit_max_steps = default_refit_steps(opt);
         engine::Band band(v);
         if (!band.has_surface()) {
             rep.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");

@@ -20,9 +20,15 @@ enum class SmoothMode {
     Anisotropic,    ///< Perona–Malik on the normals, g(κ²) = exp(−κ²/(2µ²)) (Eq. 20)
     HighBoost,      ///< high-boost filter, N' = normalize((1+α)Nⁿ − αNⁿ⁺¹) (Eq. 21–22)
     MeanCurvature,  ///< mean curvature flow φ_t = |∇φ| H, H = κ1 + κ2 (Eq. 9)
+    Bilateral,      ///< bilateral filter of the normals on the surface, a disc in model units (after
+                    ///< Zheng, Fu, Au & Tai 2011): N_i ← normalize(Σ_j W_s(|p_i − p_j|) W_r(|N_i − N_j|) N_j)
+    Guided,         ///< the bilateral filter with its range weight on a guidance field, the mean
+                    ///< normal of the most consistent patch near each sample (after Zhang, Deng,
+                    ///< Zhang, Bouaziz & Liu 2015): creases stay sharp under heavy noise
 };
 
-/// Name of a mode as the command line spells it: "isotropic", "anisotropic", "highboost", "mcf".
+/// Name of a mode as the command line spells it: "isotropic", "anisotropic", "highboost", "mcf",
+/// "bilateral", "guided".
 const char* to_string(SmoothMode mode);
 
 /// Options of smooth_volume. Lengths and times are in voxel units (h = 1) unless stated.
@@ -39,10 +45,22 @@ struct SmoothOptions {
                                  ///< ones lose (bunny_n0.2 7.91° → 9.04°, fertility_n3 5.09° → 5.75°: the
                                  ///< flow erodes their curved detail). Isotropic rounds creases with
                                  ///< more: 8 → 16 fandisk_n0.3 10.15° → 10.31°, block_n0.4 11.42° → 12.01°.
-    int normal_steps = 50;       ///< steps of the normal loop per main iteration, >= 1 (paper: 25; at
-                                 ///< resolution 256 the noise of real scans spans several voxels and
-                                 ///< needs the longer loop).
+    int normal_steps = 0;        ///< steps of the normal loop per main iteration, >= 0; 0: the mode's
+                                 ///< default, default_normal_steps(mode): 50 for the diffusions (paper:
+                                 ///< 25; at resolution 256 the noise of real scans spans several voxels
+                                 ///< and needs the longer loop).
                                  ///< MeanCurvature: explicit curvature steps per main iteration.
+                                 ///< Bilateral, Guided: filter passes per main iteration.
+    float length_scale = 0.0f;   ///< voxels, >= 0: the model's length unit ℓ, the scale of its noise and
+                                 ///< of its smallest features: smooth_mesh sets it to the input's median
+                                 ///< edge length. Bilateral and Guided size their disc by it, so a finer
+                                 ///< grid gives the same result. 0: kDefaultLengthScale.
+    float sigma_spatial = 0.6f;  ///< Bilateral, Guided: the spatial Gaussian's σ in units of
+                                 ///< length_scale (0.6: about the distance between the centroids of two
+                                 ///< adjacent triangles, bilateral normal filtering's σ_c); the disc is 2σ
+    float sigma_range = 0.35f;   ///< Bilateral, Guided: the range Gaussian's σ on the chord |N_i − N_j|
+                                 ///< (0.35, as bilateral normal filtering: a 90° crease, chord 1.41, weighs
+                                 ///< 3e-4; noise of 30°, chord 0.5, 0.36)
     float mu = 0.1f;             ///< 1/voxel, > 0: anisotropic conductance scale (paper: 0.1)
     float alpha = 1.0f;          ///< >= 0: high-boost gain (Eq. 22)
     float normal_dt = 0.1f;      ///< voxel², time step of the normal loop, > 0; values above the
@@ -50,7 +68,11 @@ struct SmoothOptions {
                                  ///< to 1/6 (with a warning)
     float refit_dt = 0.1f;       ///< voxel², time step of the refit and of mean curvature flow, > 0;
                                  ///< clamped to 1/6 (explicit second-order flow) with a warning
-    int refit_max_steps = 40;    ///< >= 1: refit steps per main iteration at most
+    int refit_max_steps = 0;     ///< >= 0: refit steps per main iteration at most; 0: the mode's default,
+                                 ///< default_refit_steps: 40 for the diffusions; for Bilateral and
+                                 ///< Guided a refit time of kNeighbourhoodRefitTime·ℓ² (ℓ =
+                                 ///< length_scale in voxels), at least 40: a surface wave an edge long
+                                 ///< needs a time ∝ ℓ² to follow its filtered normals
     double refit_tolerance = 1e-4;  ///< >= 0: the refit stops when D decreases by less than this
                                     ///< fraction of itself in one step (0: until D stops decreasing)
     int conductance_presmooth_steps = 25;  ///< >= 0, Anisotropic only: κ² for the conductance g is
@@ -70,6 +92,10 @@ struct SmoothOptions {
         ///< Resolution 256, anisotropic, mean normal error, fixed → 1.0: fandisk_n0.7 27.8° → 16.4°,
         ///< twelve_imp0.5 14.8° → 12.3°, fandisk_n0.3 8.25° → 8.25°, block_n0.4 9.71° → 9.66°
         ///< (1.5: 16.4°, –, –, 10.2°).
+    bool preserve_volume = true;  ///< Bilateral, Guided: after each refit, shift φ by a constant so that
+                                  ///< the enclosed volume is what it was before it (the refit of a
+                                  ///< filtered normal map shrinks convex parts a little, −0.1…−1.4% on
+                                  ///< the study's CAD pairs without this)
     bool second_order_term = false;  ///< add Appendix A's second term (Eq. 39), ∇·(G N), scaled by
                                      ///< the normal-loop time normal_steps·normal_dt, to the refit
     float active_band = 4.0f;    ///< voxels, in [1.5, 5]: the normal loop and the refit update the
@@ -78,8 +104,20 @@ struct SmoothOptions {
 };
 
 /// The main iterations smooth_volume runs for SmoothOptions::iterations = 0: 16 for Anisotropic,
-/// 8 for Isotropic, HighBoost and MeanCurvature.
+/// 8 for Isotropic, HighBoost and MeanCurvature, kNeighbourhoodIterations for Bilateral and Guided.
 int default_iterations(SmoothMode mode);
+/// The normal steps (filter passes) per main iteration for SmoothOptions::normal_steps = 0: 50, or
+/// kNeighbourhoodPasses for Bilateral and Guided.
+int default_normal_steps(SmoothMode mode);
+
+/// SmoothOptions::length_scale = 0 means this many voxels.
+inline constexpr float kDefaultLengthScale = 4.0f;
+inline constexpr int kNeighbourhoodIterations = 2;
+inline constexpr int kNeighbourhoodPasses = 10;
+inline constexpr float kNeighbourhoodRefitTime = 1.4f;
+
+/// The refit steps per main iteration for SmoothOptions::refit_max_steps = 0 (see there).
+int default_refit_steps(const SmoothOptions& opt);
 
 /// What one main iteration of smooth_volume did (energies in voxel units).
 struct SmoothIteration {
@@ -93,6 +131,7 @@ struct SmoothIteration {
     int refit_steps = 0;                ///< refit steps kept
     float mu = 0;                       ///< Anisotropic: the conductance scale µ used (1/voxel); 0 for
                                         ///< the other modes
+    float volume_shift = 0;             ///< voxels: the shift preserve_volume applied (positive: outwards)
     std::size_t band_voxels = 0;        ///< samples processed (the active band)
     std::size_t allocated_voxels = 0;   ///< samples held in allocated blocks
     double seconds = 0;                 ///< wall seconds of the whole main iteration

@@ -30,6 +30,8 @@ namespace {
 
 using test::add_noise;
 using test::add_smooth_noise;
+using test::box_normal_error;
+using test::BoxNormalError;
 using test::box_sdf;
 using test::equivalent_radius;
 using test::make_volume;
@@ -172,43 +174,6 @@ TEST(SmoothVolume, NormalEnergyDecreasesInLoopAndRefitEnergyInRefit) {
 
 // ------------------------------------------------------------------------------------------------
 // Features
-
-/// Mean angle (degrees) between the face normals of the extracted mesh and the true normal of the
-/// nearest box face, over triangles within `reach` voxels of an edge of the box (not near a corner),
-/// and over triangles on the flat parts.
-struct BoxNormalError {
-    double near_edges = 0, on_faces = 0;
-};
-BoxNormalError box_normal_error(const Mesh& m, const Vec3d& c, const Vec3d& e, double reach) {
-    double sum_e = 0, sum_f = 0, area_e = 0, area_f = 0;
-    for (const auto& t : m.triangles) {
-        const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), d(m.positions[t[2]]);
-        const Vec3d cr = cross(b - a, d - a);
-        const double area = 0.5 * norm(cr);
-        if (area <= 0) continue;
-        const Vec3d n = cr / (2 * area);
-        const Vec3d p = (a + b + d) / 3.0 - c;
-        double q[3];
-        int axis = 0;
-        for (int k = 0; k < 3; ++k) {
-            q[k] = std::abs(p[k]) - e[k];
-            if (q[k] > q[axis]) axis = k;
-        }
-        int near = 0;
-        for (int k = 0; k < 3; ++k) near += q[k] > -reach;
-        Vec3d truth(0, 0, 0);
-        truth[axis] = p[axis] < 0 ? -1.0 : 1.0;
-        const double ang = std::acos(std::clamp(dot(n, truth), -1.0, 1.0)) * 180.0 / kPi;
-        if (near == 2) {
-            sum_e += ang * area;
-            area_e += area;
-        } else if (near == 1) {
-            sum_f += ang * area;
-            area_f += area;
-        }
-    }
-    return {area_e > 0 ? sum_e / area_e : 180.0, area_f > 0 ? sum_f / area_f : 180.0};
-}
 
 TEST(SmoothVolume, AnisotropicKeepsNoisyCubeEdgesWhereIsotropicRoundsThem) {
     const Vec3d c(24.4, 23.7, 24.2), e(13, 13, 13);
@@ -695,13 +660,13 @@ TEST(SmoothVolume, OptionsOutOfRangeThrowInvalidInput) {
     };
     const float nan = std::numeric_limits<float>::quiet_NaN();
     expect_bad([](SmoothOptions& o) { o.iterations = -1; }, "iterations");
-    expect_bad([](SmoothOptions& o) { o.normal_steps = 0; }, "normal_steps");
+    expect_bad([](SmoothOptions& o) { o.normal_steps = -1; }, "normal_steps");
     expect_bad([](SmoothOptions& o) { o.mu = 0.0f; }, "mu");
     expect_bad([&](SmoothOptions& o) { o.mu = nan; }, "mu");
     expect_bad([](SmoothOptions& o) { o.alpha = -1.0f; }, "alpha");
     expect_bad([](SmoothOptions& o) { o.normal_dt = 0.0f; }, "normal_dt");
     expect_bad([](SmoothOptions& o) { o.refit_dt = -0.1f; }, "refit_dt");
-    expect_bad([](SmoothOptions& o) { o.refit_max_steps = 0; }, "refit_max_steps");
+    expect_bad([](SmoothOptions& o) { o.refit_max_steps = -1; }, "refit_max_steps");
     expect_bad([](SmoothOptions& o) { o.refit_tolerance = -1.0; }, "refit_tolerance");
     expect_bad([](SmoothOptions& o) { o.conductance_presmooth_steps = -1; }, "conductance_presmooth_steps");
     expect_bad([](SmoothOptions& o) { o.mu_robust = -1.0f; }, "mu_robust");

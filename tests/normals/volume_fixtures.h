@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 
+#include "core/mesh.h"
 #include "core/volume.h"
 
 namespace normalflow::test {
@@ -153,6 +154,43 @@ inline double total_curvature(const Volume& v) {
                 sum += std::max(dn2 - squared_norm(dnn), 0.0);
             }
     return sum;
+}
+
+/// Mean angle (degrees) between the face normals of the extracted mesh and the true normal of the
+/// nearest box face, over triangles within `reach` voxels of an edge of the box (not near a corner),
+/// and over triangles on the flat parts.
+struct BoxNormalError {
+    double near_edges = 0, on_faces = 0;
+};
+inline BoxNormalError box_normal_error(const Mesh& m, const Vec3d& c, const Vec3d& e, double reach) {
+    double sum_e = 0, sum_f = 0, area_e = 0, area_f = 0;
+    for (const auto& t : m.triangles) {
+        const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), d(m.positions[t[2]]);
+        const Vec3d cr = cross(b - a, d - a);
+        const double area = 0.5 * norm(cr);
+        if (area <= 0) continue;
+        const Vec3d n = cr / (2 * area);
+        const Vec3d p = (a + b + d) / 3.0 - c;
+        double q[3];
+        int axis = 0;
+        for (int k = 0; k < 3; ++k) {
+            q[k] = std::abs(p[k]) - e[k];
+            if (q[k] > q[axis]) axis = k;
+        }
+        int near = 0;
+        for (int k = 0; k < 3; ++k) near += q[k] > -reach;
+        Vec3d truth(0, 0, 0);
+        truth[axis] = p[axis] < 0 ? -1.0 : 1.0;
+        const double ang = std::acos(std::clamp(dot(n, truth), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+        if (near == 2) {
+            sum_e += ang * area;
+            area_e += area;
+        } else if (near == 1) {
+            sum_f += ang * area;
+            area_f += area;
+        }
+    }
+    return {area_e > 0 ? sum_e / area_e : 180.0, area_f > 0 ? sum_f / area_f : 180.0};
 }
 
 }  // namespace normalflow::test

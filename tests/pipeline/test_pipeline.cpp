@@ -145,6 +145,58 @@ TEST(Pipeline, ScanBandIsAtLeastThreeVoxelsWhenSmoothing) {
     EXPECT_EQ(mesh_to_volume(test::icosphere(1.0, 2), o).half_width, 1.5f);
 }
 
+TEST(Pipeline, ModelLengthScaleIsTheMedianEdgeLength) {
+    Mesh square;  // two triangles of a 2 × 2 square: edges 2, 2, 2√2 each
+    square.positions = {Vec3f(0, 0, 0), Vec3f(2, 0, 0), Vec3f(2, 2, 0), Vec3f(0, 2, 0)};
+    square.triangles = {{0, 1, 2}, {0, 2, 3}};
+    EXPECT_DOUBLE_EQ(model_length_scale(square), 2.0);
+    square.triangles.push_back({1, 3, 2});  // a third triangle: one more 2√2 edge and two of 2
+    EXPECT_DOUBLE_EQ(model_length_scale(square), 2.0);
+    for (auto& p : square.positions) p = p * 0.5f;  // it scales with the model
+    EXPECT_DOUBLE_EQ(model_length_scale(square), 1.0);
+    EXPECT_EQ(model_length_scale(Mesh{}), 0.0);
+}
+
+TEST(Pipeline, AutomaticResolutionFollowsTheLengthScaleAndTheMemory) {
+    const Mesh sphere = test::icosphere(1.0, 3);  // longest side 2
+    PipelineOptions o = quick_options();
+    o.scan.resolution = 0;
+    const double ell = model_length_scale(sphere);
+    ASSERT_GT(ell, 0.0);
+    const int expected = std::clamp(int(std::ceil(kAutoVoxelsPerLength * 2.0 / ell)), kAutoResolutionMin, kAutoResolutionMax);
+    EXPECT_EQ(auto_resolution(sphere, o), expected);
+    o.length_scale = 0.025;  // 5 voxels per 0.025 along 2: 400
+    EXPECT_EQ(auto_resolution(sphere, o), 400);
+    o.length_scale = 0.001;
+    EXPECT_EQ(auto_resolution(sphere, o), kAutoResolutionMax);
+    o.length_scale = 1.0;
+    EXPECT_EQ(auto_resolution(sphere, o), kAutoResolutionMin);
+    // Within a memory limit that fits 256 but not 400: lowered in 10% steps to what fits.
+    o.length_scale = 0.025;
+    PipelineOptions at = o;
+    at.scan.resolution = 256;
+    o.max_memory_bytes = std::size_t(check_memory(sphere, at) * 1.01);
+    const int lowered = auto_resolution(sphere, o);
+    EXPECT_LT(lowered, 400);
+    EXPECT_GE(lowered, 230);
+    at.scan.resolution = lowered;
+    at.max_memory_bytes = o.max_memory_bytes;
+    EXPECT_NO_THROW(check_memory(sphere, at));
+    // the pipeline scan-converts at the automatic resolution...
+    o = quick_options();
+    o.scan.resolution = 0;
+    o.length_scale = 0.025;
+    PipelineReport rep;
+    (void)mesh_to_volume(sphere, o, &rep);
+    EXPECT_EQ(rep.scan_options.resolution, 400);
+    // ...and smooths with the length scale given, or the input's
+    o.scan.resolution = 32;
+    o.length_scale = 0.1;
+    EXPECT_DOUBLE_EQ(smooth_mesh(sphere, o).report.length_scale, 0.1);
+    o.length_scale = 0;
+    EXPECT_NEAR(smooth_mesh(sphere, o).report.length_scale, ell, 1e-12);
+}
+
 TEST(Pipeline, MemoryLimitRefusesWithOutOfMemory) {
     PipelineOptions o = quick_options();
     o.scan.resolution = 2048;
@@ -170,12 +222,16 @@ TEST(Pipeline, BadOptionsThrowInvalidInputNamingTheField) {
         EXPECT_NE(msg.find(field), std::string::npos) << msg;
         EXPECT_THROW(validate(o), InvalidInput);
     };
-    expect_field("scan.resolution", [](PipelineOptions& o) { o.scan.resolution = 0; });
+    expect_field("scan.resolution", [](PipelineOptions& o) { o.scan.resolution = -1; });
     expect_field("scan.voxel_size", [](PipelineOptions& o) { o.scan.voxel_size = -1; });
     expect_field("scan.half_width", [](PipelineOptions& o) { o.scan.half_width = 0.5f; });
     expect_field("scan.shell_thickness", [](PipelineOptions& o) { o.scan.shell_thickness = -1; });
     expect_field("smooth.iterations", [](PipelineOptions& o) { o.smooth.iterations = -1; });
-    expect_field("smooth.normal_steps", [](PipelineOptions& o) { o.smooth.normal_steps = 0; });
+    expect_field("smooth.normal_steps", [](PipelineOptions& o) { o.smooth.normal_steps = -1; });
+    expect_field("smooth.sigma_range", [](PipelineOptions& o) { o.smooth.sigma_range = 0; });
+    expect_field("smooth.sigma_spatial", [](PipelineOptions& o) { o.smooth.sigma_spatial = -1; });
+    expect_field("smooth.length_scale", [](PipelineOptions& o) { o.smooth.length_scale = -1; });
+    expect_field("length_scale", [](PipelineOptions& o) { o.length_scale = -1; });
     expect_field("smooth.mu", [](PipelineOptions& o) { o.smooth.mu = -0.1f; });
     expect_field("smooth.alpha", [](PipelineOptions& o) { o.smooth.alpha = std::nanf(""); });
     expect_field("target_faces", [](PipelineOptions& o) { o.target_faces = 2; });
@@ -196,9 +252,12 @@ TEST(Pipeline, EmptyVolumeMessages) {
 }
 
 TEST(Pipeline, ReportJsonHasEveryStage) {
-    const PipelineReport rep = smooth_mesh(test::icosphere(1.0, 2), quick_options()).report;
+    PipelineOptions o = quick_options();
+    o.smooth.mode = SmoothMode::Anisotropic;  // µ is reported by the anisotropic filter
+    const PipelineReport rep = smooth_mesh(test::icosphere(1.0, 2), o).report;
     const std::string j = to_json(rep).dump();
     for (const char* key : {"\"voxelize\"", "\"band_half_width\"", "\"smooth\"", "\"stopped_unchanged\"", "\"mu\"",
+                            "\"length_scale\"", "\"volume_shift\"",
                             "\"extract\"", "\"seconds\"", "\"total\"", "\"warnings\"", "\"distance\":\"bvh\""})
         EXPECT_NE(j.find(key), std::string::npos) << key << " missing from " << j.substr(0, 300);
 }

@@ -25,6 +25,8 @@ public:
 std::unique_ptr<NormalFilter> make_isotropic_filter();    ///< G(κ²) = κ² (Eq. 15)
 std::unique_ptr<NormalFilter> make_anisotropic_filter();  ///< Perona–Malik (Eq. 20), see SmoothOptions
 std::unique_ptr<NormalFilter> make_highboost_filter();    ///< isotropic, then Eq. 21–22
+std::unique_ptr<NormalFilter> make_bilateral_filter();    ///< bilateral.cpp
+std::unique_ptr<NormalFilter> make_guided_filter();       ///< bilateral.cpp, guided range
 
 /// The filter of a mode; nullptr for MeanCurvature (no normals).
 std::unique_ptr<NormalFilter> make_normal_filter(SmoothMode mode);

@@ -1,0 +1,220 @@
+// The neighbourhood filters of the normal map on the surface: bilateral (the band's counterpart of
+// bilateral normal filtering, Zheng, Fu, Au & Tai 2011) and guided (the range weight taken on a
+// guidance field of patch normals, after Zhang, Deng, Zhang, Bouaziz & Liu 2015). Both average the
+// normals of the samples next to the surface (SurfaceSamples: |φ| <= kShell, moved to their
+// closest points) over a disc whose size is given in the model's units (SmoothOptions::
+// length_scale), then carry the result to the rest of the active band by closest point.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <utility>
+
+#include "band/iterate.h"
+#include "normals/kernels/pair_sum.h"
+#include "normals/stages/normal_filter.h"
+#include "normals/stages/normal_loop.h"
+#include "normals/stages/surface_samples.h"
+
+namespace normalflow::engine {
+namespace {
+
+/// Samples with |φ| <= kShell are the point set the filters average (about 1.5 per voxel² of
+/// surface, each within 0.75 voxel of its closest point).
+constexpr float kShell = 0.75f;
+
+float lane_total(const float* acc) {
+    return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
+}
+
+/// acc = Σ over the samples within √r2 of q (their blocks near block b) of the pair weights
+/// (kernels/pair_sum), range values r, values v.
+void gather(const SurfaceSamples& S, std::int32_t b, const Samples (&r)[3], const Samples (&v)[3], const float q[3],
+            const float rq[3], float ks, float kr, float r2, float (&acc)[32]) {
+    std::fill(acc, acc + 32, 0.0f);
+    for (std::int32_t b2 : S.near(b)) {
+        if (S.box_distance2(b2, q) > r2) continue;
+        pair_sum(S.run(b2, r, v), q, rq, ks, kr, r2, acc);
+    }
+}
+
+/// (x, y, z) = the lane totals of acc normalised; false when they vanish.
+bool normalised(const float (&acc)[32], float out[3]) {
+    const float x = lane_total(acc), y = lane_total(acc + 8), z = lane_total(acc + 16);
+    const float len = std::sqrt((x * x + y * y) + z * z);
+    if (!(len > 1e-12f)) return false;
+    out[0] = x / len;
+    out[1] = y / len;
+    out[2] = z / len;
+    return true;
+}
+
+class NeighbourhoodFilter final : public NormalFilter {
+public:
+    explicit NeighbourhoodFilter(bool guided) : guided_(guided) {}
+
+    void filter_normals(StageContext& c) override {
+        Band& band = c.band;
+        WorkBuffers& w = band.work();
+        loop_.prepare(c);
+        std::vector<double> energy;
+        energy.push_back(loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false));
+
+        const float ell = c.opt.length_scale > 0.0f ? c.opt.length_scale : kDefaultLengthScale;
+        const float sigma_s = c.opt.sigma_spatial * ell;
+        const float radius = 2.0f * sigma_s;
+        const float r2 = radius * radius;
+        const float ks = 1.0f / (2.0f * sigma_s * sigma_s);
+        const float kr = 1.0f / (2.0f * c.opt.sigma_range * c.opt.sigma_range);
+        S_.build(band, w.normals, kShell, radius, c.opt.active_band);
+        const std::size_t n = S_.size();
+        for (int k = 0; k < 3; ++k) {
+            copy_samples(S_.n[k], cur_[k]);
+            fit_samples(next_[k], n);
+            fit_samples(guide_[k], n);
+            fit_samples(mean_[k], n);
+        }
+        fit_samples(consistency_, n);
+        const std::vector<std::int32_t>& act = band.active();
+
+        for (int pass = 0; pass < c.opt.normal_steps; ++pass) {
+            c.ctl.poll();
+            if (guided_) guidance(band, radius);
+            const Samples(&range)[3] = guided_ ? guide_ : cur_;
+            band.for_blocks(act, 0, [&](std::size_t, std::int32_t b, Scratch&) {
+                float acc[32];
+                for (std::size_t i = S_.begin(b); i < S_.end(b); ++i) {
+                    if (S_.index[i] == SurfaceSamples::kPadding) continue;
+                    const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
+                    const float rq[3] = {range[0][i], range[1][i], range[2][i]};
+                    gather(S_, b, range, cur_, q, rq, ks, kr, r2, acc);
+                    float o[3];
+                    if (!normalised(acc, o))
+                        for (int k = 0; k < 3; ++k) o[k] = cur_[k][i];
+                    for (int k = 0; k < 3; ++k) next_[k][i] = o[k];
+                }
+            });
+            for (int k = 0; k < 3; ++k) std::swap(cur_[k], next_[k]);
+            c.ctl.tick(0.5 * double(pass + 1) / c.opt.normal_steps);
+        }
+        extend(c, ks, kr, r2);
+        energy.push_back(loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false));
+        c.record().normal_energy = std::move(energy);
+    }
+
+private:
+    /// The guidance of each surface sample: the mean normal of the most consistent patch (the
+    /// samples within `patch` of a centre) among the patches centred within `patch` of it;
+    /// consistency = |Σ N| / count, 1 for a patch of equal normals. A patch on one side of a
+    /// crease is more consistent than one across it, so the guidance keeps the crease sharp
+    /// while the noise, averaged over the patch, leaves it.
+    void guidance(const Band& band, float radius) {
+        const float patch = 0.5f * radius;
+        const float p2 = patch * patch;
+        const std::vector<std::int32_t>& act = band.active();
+        band.for_blocks(act, 0, [&](std::size_t, std::int32_t b, Scratch&) {
+            float acc[32];
+            for (std::size_t i = S_.begin(b); i < S_.end(b); ++i) {
+                if (S_.index[i] == SurfaceSamples::kPadding) {
+                    consistency_[i] = -1.0f;
+                    continue;
+                }
+                const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
+                const float rq[3] = {0, 0, 0};
+                gather(S_, b, cur_, cur_, q, rq, 0.0f, 0.0f, p2, acc);
+                const float x = lane_total(acc), y = lane_total(acc + 8), z = lane_total(acc + 16);
+                const float cnt = lane_total(acc + 24);
+                const float len = std::sqrt((x * x + y * y) + z * z);
+                consistency_[i] = cnt > 0.0f ? len / cnt : 0.0f;
+                const float inv = len > 1e-12f ? 1.0f / len : 0.0f;
+                mean_[0][i] = x * inv;
+                mean_[1][i] = y * inv;
+                mean_[2][i] = z * inv;
+            }
+        });
+        band.for_blocks(act, 0, [&](std::size_t, std::int32_t b, Scratch&) {
+            for (std::size_t i = S_.begin(b); i < S_.end(b); ++i) {
+                if (S_.index[i] == SurfaceSamples::kPadding) continue;
+                const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
+                float best = -1.0f;
+                std::size_t at = i;
+                for (std::int32_t b2 : S_.near(b)) {
+                    if (S_.box_distance2(b2, q) > p2) continue;
+                    for (std::size_t j = S_.begin(b2); j < S_.end(b2); ++j) {
+                        const float dx = S_.p[0][j] - q[0], dy = S_.p[1][j] - q[1], dz = S_.p[2][j] - q[2];
+                        if ((dx * dx + dy * dy) + dz * dz <= p2 && consistency_[j] > best) {
+                            best = consistency_[j];
+                            at = j;
+                        }
+                    }
+                }
+                for (int k = 0; k < 3; ++k) guide_[k][i] = mean_[k][at];
+            }
+        });
+    }
+
+    /// The filtered normals into work().normals: each surface sample its own; every other active
+    /// sample x the filtered normals around its closest point x − φ(x)N(x), with the range weight
+    /// taken against the filtered normal of the surface sample nearest to that point.
+    void extend(StageContext& c, float ks, float kr, float r2) {
+        Band& band = c.band;
+        WorkBuffers& w = band.work();
+        const Samples& phi = band.phi();
+        const std::uint8_t* mask = band.mask();
+        const std::vector<std::int32_t>& act = band.active();
+        const Samples(&range)[3] = guided_ ? guide_ : cur_;
+        band.for_blocks(act, 0, [&](std::size_t, std::int32_t b, Scratch&) {
+            const auto& bc = band.block_coord(std::size_t(b));
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            float acc[32];
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        if (!mask[i] || std::abs(phi[i]) <= kShell) continue;
+                        const float q[3] = {float(bc[0] * kBlockDim + x) - phi[i] * w.normals[0][i],
+                                            float(bc[1] * kBlockDim + y) - phi[i] * w.normals[1][i],
+                                            float(bc[2] * kBlockDim + z) - phi[i] * w.normals[2][i]};
+                        float best = r2;
+                        std::size_t at = SurfaceSamples::kPadding;
+                        for (std::int32_t b2 : S_.near(b)) {
+                            if (S_.box_distance2(b2, q) > best) continue;
+                            for (std::size_t j = S_.begin(b2); j < S_.end(b2); ++j) {
+                                const float dx = S_.p[0][j] - q[0], dy = S_.p[1][j] - q[1], dz = S_.p[2][j] - q[2];
+                                const float d2 = (dx * dx + dy * dy) + dz * dz;
+                                if (d2 < best) {
+                                    best = d2;
+                                    at = j;
+                                }
+                            }
+                        }
+                        if (at == SurfaceSamples::kPadding) continue;  // nothing within reach: keep N
+                        const float rq[3] = {range[0][at], range[1][at], range[2][at]};
+                        gather(S_, b, range, cur_, q, rq, ks, kr, r2, acc);
+                        float o[3];
+                        if (!normalised(acc, o)) continue;
+                        for (int k = 0; k < 3; ++k) w.normals[k][i] = o[k];
+                    }
+            // the surface samples of this block: their own filtered normals
+            for (std::size_t j = S_.begin(b); j < S_.end(b); ++j) {
+                const std::size_t i = S_.index[j];
+                if (i == SurfaceSamples::kPadding) continue;
+                for (int k = 0; k < 3; ++k) w.normals[k][i] = cur_[k][j];
+            }
+        });
+    }
+
+    bool guided_;
+    NormalLoop loop_;
+    SurfaceSamples S_;
+    Samples cur_[3], next_[3], guide_[3], mean_[3];
+    Samples consistency_;
+};
+
+}  // namespace
+
+std::unique_ptr<NormalFilter> make_bilateral_filter() { return std::make_unique<NeighbourhoodFilter>(false); }
+std::unique_ptr<NormalFilter> make_guided_filter() { return std::make_unique<NeighbourhoodFilter>(true); }
+
+}  // namespace normalflow::engine

@@ -1,0 +1,20 @@
+#pragma once
+/// \file volume_constraint.h
+/// Keeping the enclosed volume through a refit: a uniform shift of φ, the level-set counterpart
+/// of the centroid and volume restoration mesh filters apply after their vertex update.
+
+#include "normals/stages/stage.h"
+
+namespace normalflow::engine {
+
+/// The volume inside the zero level over the active samples, voxels: Σ clamp(0.5 − φ, 0, 1)
+/// (each sample a unit cell, the surface crossing it linearly). Only differences are meaningful:
+/// samples outside the active mask are not counted. Summed per block, then in block order.
+double active_volume(const Band& band);
+
+/// Shifts φ on every allocated sample by one constant so that active_volume(band) comes back to
+/// `target` (two Newton steps on the piecewise-linear volume; none when no sample is within half
+/// a voxel of the surface). Returns the shift, voxels (positive: the surface moved outwards).
+float restore_volume(Band& band, double target);
+
+}  // namespace normalflow::engine
