@@ -280,6 +280,9 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--refit-steps", s.refit_max_steps,
                     "refit steps per main iteration at most (default: 40; bilateral, guided: a refit time of 1.4 length units squared)")
         ->check(CLI::Range(1, 100000));
+    cmd->add_option("--refit-tolerance", s.refit_tolerance,
+                    "the refit stops when D falls by less than this fraction of itself in a step")
+        ->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--refit-dt", s.refit_dt, "refit time step, voxel² (at most 1/6)")
         ->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_flag("!--no-preserve-volume", s.preserve_volume,

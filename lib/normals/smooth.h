@@ -74,7 +74,9 @@ struct SmoothOptions {
                                  ///< length_scale in voxels), at least 40: a surface wave an edge long
                                  ///< needs a time ∝ ℓ² to follow its filtered normals
     double refit_tolerance = 1e-4;  ///< >= 0: the refit stops when D decreases by less than this
-                                    ///< fraction of itself in one step (0: until D stops decreasing)
+                                    ///< fraction of itself in one step (0: until D stops decreasing).
+                                    ///< Bilateral and Guided: when D has not reached a new low by this
+                                    ///< fraction for max(5, refit_max_steps/20) steps.
     int conductance_presmooth_steps = 25;  ///< >= 0, Anisotropic only: κ² for the conductance g is
         ///< taken from the normals pre-smoothed by this many isotropic steps of normal_dt (Catté,
         ///< Lions, Morel & Coll 1992: a regularised Perona–Malik; 25 steps of 0.1 ≈ Gaussian σ ≈ 2.2

@@ -23,6 +23,9 @@ namespace {
 /// Samples with |φ| <= kShell are the point set the filters average (about 1.5 per voxel² of
 /// surface, each within 0.75 voxel of its closest point).
 constexpr float kShell = 0.75f;
+/// The extension takes the filtered normals around a closest point only where the nearest surface
+/// sample's normal is within 45° of the sample's own.
+constexpr float kSameSide = 0.70710678f;
 
 float lane_total(const float* acc) {
     return ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]));
@@ -191,6 +194,10 @@ private:
                         }
                         if (at == SurfaceSamples::kPadding) continue;  // nothing within reach: keep N
                         const float rq[3] = {range[0][at], range[1][at], range[2][at]};
+                        // The nearest surface sample faces another way (the other wall of a groove
+                        // or a thin part, the far side of a crease's wedge): keep the sample's own N.
+                        if ((rq[0] * w.normals[0][i] + rq[1] * w.normals[1][i]) + rq[2] * w.normals[2][i] < kSameSide)
+                            continue;
                         gather(S_, b, range, cur_, q, rq, ks, kr, r2, acc);
                         float o[3];
                         if (!normalised(acc, o)) continue;
