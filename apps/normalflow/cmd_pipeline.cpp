@@ -242,7 +242,6 @@ void add_extract_command(CLI::App& app) {
 void add_smooth_command(CLI::App& app) {
     auto a = std::make_shared<SmoothArgs>();
     SmoothOptions& s = a->pipeline.smooth;
-    a->pipeline.scan.resolution = 0;  // automatic (io/pipeline auto_resolution)
     auto* cmd = app.add_subcommand("smooth", "voxelize, filter the normal map and refit, extract (the whole pipeline)");
     cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
     cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();

@@ -50,7 +50,7 @@ inline constexpr int kAutoResolutionMax = 512;
 struct PipelineOptions {
     /// Scan conversion: resolution (0: automatic, auto_resolution) or voxel size, band half-width (raised to
     /// kSmoothingScanBandVoxels when smoothing), shell thickness, threads.
-    ScanConvertOptions scan;
+    ScanConvertOptions scan{.resolution = 0};
     /// Repair the mesh first (io/cgal repair_mesh: merge points, drop degenerate and duplicate
     /// faces, orient). Without CGAL it is skipped with a warning.
     bool repair = true;

@@ -169,7 +169,12 @@ struct SmoothReport {
 /// samples by φ/|∇φ| bounded by the axis crossings, the rest by block-Jacobi passes of the Godunov
 /// eikonal update, Jacobi passes inside each block until it settles; between main iterations exact
 /// only as far as an iteration reads φ, active_band + 3 voxels, on return out to the half width).
-/// MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3). A main iteration whose refit keeps no
+/// MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3). Bilateral and Guided replace (2): the
+/// samples with |φ| <= 0.75 voxel, moved to their closest points x − φN, are filtered by
+/// normal_steps passes of a bilateral (or guided) average over a disc of radius 2·sigma_spatial·
+/// length_scale, and every other active sample takes the filtered normals around its closest point;
+/// their refit (3) runs for a time in model units (default_refit_steps) and, with preserve_volume,
+/// is followed by a uniform shift of φ that restores the enclosed volume. A main iteration whose refit keeps no
 /// step leaves φ unchanged, so every later one would repeat it: the run stops there
 /// (SmoothReport::stopped_unchanged).
 /// Anisotropic mode regularises the conductance (see SmoothOptions::conductance_presmooth_steps).
