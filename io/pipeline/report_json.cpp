@@ -32,9 +32,10 @@ Json to_json(const SmoothReport& r) {
     std::vector<double> seconds, g0, g1, d0, d1;
     std::vector<std::size_t> band, allocated;
     std::vector<int> steps;
-    std::vector<float> mu, shift;
+    std::vector<float> mu, shift, rough;
     for (const SmoothIteration& it : r.iterations) {
         shift.push_back(it.volume_shift);
+        rough.push_back(it.roughness);
         seconds.push_back(it.seconds);
         band.push_back(it.band_voxels);
         allocated.push_back(it.allocated_voxels);
@@ -57,8 +58,8 @@ Json to_json(const SmoothReport& r) {
         .set("refit_energy_start", Json::array(d0))
         .set("refit_energy", Json::array(d1)).set("refit_steps", Json::array(steps));
     if (!mu.empty()) j.set("mu", Json::array(mu));
-    j.set("volume_shift", Json::array(shift));
-    j.set("stopped_unchanged", r.stopped_unchanged).set("seconds_normals", r.seconds_normals)
+    j.set("volume_shift", Json::array(shift)).set("roughness", Json::array(rough));
+    j.set("stopped_unchanged", r.stopped_unchanged).set("stopped_smooth", r.stopped_smooth).set("seconds_normals", r.seconds_normals)
         .set("seconds_refit", r.seconds_refit).set("seconds_reinit", r.seconds_reinit)
         .set("warnings", Json::array(r.warnings));
     return j;

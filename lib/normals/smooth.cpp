@@ -54,7 +54,7 @@ double seconds_since(Clock::time_point t0) {
 float working_limit(const SmoothOptions& opt) { return std::min(engine::kHalfWidth, opt.active_band + 3.0f); }
 
 /// The main iterations on a band with a surface (opt.iterations resolved).
-void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progress* progress) {
+void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progress* progress, bool auto_stop) {
     using namespace engine;
     RunControl ctl(progress, opt.iterations);
     StageContext c{band, opt, rep, ctl};
@@ -96,13 +96,20 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
         // (Reinitialising the unchanged φ and going on would only let the interface samples'
         // φ/|∇φ| drift a little each time.)
         const bool unchanged = filter && record.refit_steps == 0;
+        // The filter left the normal map smooth at its disc's scale: this iteration is the last.
+        const bool smooth_enough = auto_stop && record.roughness < kNeighbourhoodRoughness;
         const auto t2 = Clock::now();
         if (!(unchanged && band.reinit_limit() >= kHalfWidth)) {
             band.update_band();
-            band.reinitialise(it + 1 < opt.iterations && !unchanged ? working_limit(opt) : kHalfWidth, ctl);
+            band.reinitialise(it + 1 < opt.iterations && !unchanged && !smooth_enough ? working_limit(opt) : kHalfWidth, ctl);
         }
         rep.seconds_reinit += seconds_since(t2);
         record.seconds = seconds_since(t_it);
+        if (smooth_enough && !unchanged && it + 1 < opt.iterations) {
+            rep.stopped_smooth = true;
+            ctl.finish();
+            break;
+        }
         if (unchanged && it + 1 < opt.iterations) {
             rep.stopped_unchanged = true;
             ctl.finish();
@@ -178,7 +185,8 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
             rep.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");
             return;
         }
-        run(band, opt, rep, progress);
+        const bool auto_stop = options.iterations == 0 && (opt.mode == SmoothMode::Bilateral || opt.mode == SmoothMode::Guided);
+        run(band, opt, rep, progress, auto_stop);
         band.write_back(v);
     };
     if (options.threads > 0) {

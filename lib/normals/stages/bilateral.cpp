@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <utility>
+#include <vector>
 
 #include "band/iterate.h"
 #include "normals/kernels/pair_sum.h"
@@ -101,12 +102,44 @@ public:
             for (int k = 0; k < 3; ++k) std::swap(cur_[k], next_[k]);
             c.ctl.tick(0.5 * double(pass + 1) / c.opt.normal_steps);
         }
+        c.record().roughness = roughness(band, ks, r2);
         extend(c, ks, kr, r2);
         energy.push_back(loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false));
         c.record().normal_energy = std::move(energy);
     }
 
 private:
+    /// What the filter left: the 75th percentile over the surface samples of |N_i − M_i|, M_i the
+    /// plain (spatial-only) Gaussian mean of the filtered normals over i's disc. Near 0 where the
+    /// normal map is smooth at the disc's scale; creases (up to a quarter of the samples) do not
+    /// count; noise that is left does.
+    float roughness(const Band& band, float ks, float r2) {
+        const std::size_t n = S_.size();
+        fit_samples(consistency_, n);
+        band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
+            float acc[32];
+            for (std::size_t i = S_.begin(b); i < S_.end(b); ++i) {
+                consistency_[i] = -1.0f;
+                if (S_.index[i] == SurfaceSamples::kPadding) continue;
+                const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
+                const float rq[3] = {0, 0, 0};
+                gather(S_, b, cur_, cur_, q, rq, ks, 0.0f, r2, acc);
+                float o[3];
+                if (!normalised(acc, o)) continue;
+                const float dx = cur_[0][i] - o[0], dy = cur_[1][i] - o[1], dz = cur_[2][i] - o[2];
+                consistency_[i] = std::sqrt((dx * dx + dy * dy) + dz * dz);
+            }
+        });
+        std::vector<float> v;
+        v.reserve(n);
+        for (std::size_t i = 0; i < n; ++i)
+            if (consistency_[i] >= 0.0f) v.push_back(consistency_[i]);
+        if (v.empty()) return 0.0f;
+        const auto q = v.begin() + std::ptrdiff_t(v.size() * 3 / 4);
+        std::nth_element(v.begin(), q, v.end());
+        return *q;
+    }
+
     /// The guidance of each surface sample: the mean normal of the most consistent patch (the
     /// samples within `patch` of a centre) among the patches centred within `patch` of it;
     /// consistency = |Σ N| / count, 1 for a patch of equal normals. A patch on one side of a
