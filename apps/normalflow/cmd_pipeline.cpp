@@ -209,6 +209,9 @@ int run_smooth(const SmoothArgs& a) {
                       std::to_string(opt.smooth.iterations > 0 ? opt.smooth.iterations
                                                                : default_iterations(opt.smooth.mode)) +
                       ": its refit kept no step, so the surface no longer changes");
+    if (r.smooth.stopped_smooth)
+        progress.note("smooth: stopped after main iteration " + std::to_string(r.smooth.iterations_run()) +
+                      ": the filtered normal map is smooth at the filter's scale");
     write_result(a.output, m, progress, j, a.draco);
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles, " +
