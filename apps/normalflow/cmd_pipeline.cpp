@@ -253,7 +253,7 @@ void add_smooth_command(CLI::App& app) {
     for (SmoothMode m : {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature,
                          SmoothMode::Bilateral, SmoothMode::Guided})
         modes[to_string(m)] = m;
-    add_enum_option(cmd, "--mode", s.mode, modes, "isotropic | anisotropic | highboost | mcf | bilateral | guided");
+    add_enum_option(cmd, "--mode", s.mode, modes, "bilateral | guided | anisotropic | isotropic | highboost | mcf");
     cmd->add_option("--iterations", s.iterations,
                     "main iterations (normal loop + refit); default: " +
                         std::to_string(default_iterations(SmoothMode::Anisotropic)) + " for anisotropic, " +

@@ -77,7 +77,7 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
             filter->filter_normals(c);
             rep.seconds_normals += seconds_since(t0);
             const auto t1 = Clock::now();
-            const bool keep = opt.preserve_volume && (opt.mode == SmoothMode::Bilateral || opt.mode == SmoothMode::Guided);
+            const bool keep = opt.preserve_volume && is_neighbourhood_filter(opt.mode);
             const double volume = keep ? active_volume(band) : 0.0;
             refit_to_normals(c);
             if (keep && record.refit_steps > 0) record.volume_shift = restore_volume(band, volume);
@@ -157,14 +157,14 @@ int default_iterations(SmoothMode mode) {
 }
 
 int default_refit_steps(const SmoothOptions& opt) {
-    if (opt.mode != SmoothMode::Bilateral && opt.mode != SmoothMode::Guided) return 40;
+    if (!is_neighbourhood_filter(opt.mode)) return 40;
     const float ell = opt.length_scale > 0.0f ? opt.length_scale : kDefaultLengthScale;
     const double steps = std::ceil(double(kNeighbourhoodRefitTime) * ell * ell / std::min(opt.refit_dt, engine::kMaxDt));
     return int(std::clamp(steps, 40.0, 100000.0));
 }
 
 int default_normal_steps(SmoothMode mode) {
-    return mode == SmoothMode::Bilateral || mode == SmoothMode::Guided ? kNeighbourhoodPasses : 50;
+    return is_neighbourhood_filter(mode) ? kNeighbourhoodPasses : 50;
 }
 
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress) {
@@ -185,7 +185,7 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
             rep.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");
             return;
         }
-        const bool auto_stop = options.iterations == 0 && (opt.mode == SmoothMode::Bilateral || opt.mode == SmoothMode::Guided);
+        const bool auto_stop = options.iterations == 0 && is_neighbourhood_filter(opt.mode);
         run(band, opt, rep, progress, auto_stop);
         band.write_back(v);
     };

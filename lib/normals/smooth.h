@@ -27,6 +27,10 @@ enum class SmoothMode {
                     ///< Zhang, Bouaziz & Liu 2015): creases stay sharp under heavy noise
 };
 
+/// Whether a mode is one of the neighbourhood filters (Bilateral, Guided): their parameters are in
+/// the model's units (SmoothOptions::length_scale).
+constexpr bool is_neighbourhood_filter(SmoothMode m) { return m == SmoothMode::Bilateral || m == SmoothMode::Guided; }
+
 /// Name of a mode as the command line spells it: "isotropic", "anisotropic", "highboost", "mcf",
 /// "bilateral", "guided".
 const char* to_string(SmoothMode mode);

@@ -180,7 +180,7 @@ void refit_to_normals(StageContext& c) {
     // and not on the next (sharpsphere_n0.3 at resolution 239: 28 steps, 12.0°; at 230 and 256
     // the whole time, 6.4°). Their refit stops when D has not reached a new low for `patience`
     // steps, or when it rose to twice its low (a refit that runs away), undoing that last step.
-    const bool patient = c.opt.mode == SmoothMode::Bilateral || c.opt.mode == SmoothMode::Guided;
+    const bool patient = is_neighbourhood_filter(c.opt.mode);
     const int patience = std::max(5, c.opt.refit_max_steps / 20);
     double best = 0.0;
     int since_best = 0;
