@@ -49,11 +49,7 @@ TEST(NeighbourhoodFilters, SphereDoesNotDrift) {
         EXPECT_TRUE(rep.stopped_smooth) << to_string(mode);
         EXPECT_LT(rep.iterations[0].roughness, kNeighbourhoodRoughness) << to_string(mode);
         const double r1 = equivalent_radius(v);
-        const Mesh m = extract_surface(v);
-        double mean = 0, dev = 0;
-        for (const auto& p : m.positions) mean += norm(Vec3d(p) - c);
-        mean /= double(m.positions.size());
-        for (const auto& p : m.positions) dev = std::max(dev, std::abs(norm(Vec3d(p) - c) - mean));
+        const double dev = test::radial_stats(v, c).max_deviation;
         std::printf("%s sphere: r0 %.4f r1 %.4f, max radial deviation %.4f (voxels)\n", to_string(mode), r0, r1, dev);
         EXPECT_LT(std::abs(r1 - r0), 0.05) << to_string(mode);
         EXPECT_LT(dev, 0.15) << to_string(mode);  // still a sphere, as under the diffusions

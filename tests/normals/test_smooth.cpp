@@ -35,6 +35,8 @@ using test::BoxNormalError;
 using test::box_sdf;
 using test::equivalent_radius;
 using test::make_volume;
+using test::radial_stats;
+using test::RadialStats;
 using test::sphere_sdf;
 using test::total_curvature;
 
@@ -56,20 +58,6 @@ std::vector<float> mus(const SmoothReport& r) {
     return m;
 }
 
-/// Mean and max |‖p − c‖ − mean radius| of the extracted surface's vertices (voxels, h = 1).
-struct RadialStats {
-    double mean_radius = 0, max_deviation = 0;
-};
-RadialStats radial_stats(const Volume& v, const Vec3d& c) {
-    const Mesh m = extract_surface(v);
-    RadialStats s;
-    if (m.positions.empty()) return s;
-    for (const auto& p : m.positions) s.mean_radius += norm(Vec3d(p) - c);
-    s.mean_radius /= double(m.positions.size());
-    for (const auto& p : m.positions)
-        s.max_deviation = std::max(s.max_deviation, std::abs(norm(Vec3d(p) - c) - s.mean_radius));
-    return s;
-}
 
 // ------------------------------------------------------------------------------------------------
 // Known answers

@@ -9,6 +9,7 @@
 
 #include "core/mesh.h"
 #include "core/volume.h"
+#include "extract/extract_surface.h"
 
 namespace normalflow::test {
 
@@ -191,6 +192,21 @@ inline BoxNormalError box_normal_error(const Mesh& m, const Vec3d& c, const Vec3
         }
     }
     return {area_e > 0 ? sum_e / area_e : 180.0, area_f > 0 ? sum_f / area_f : 180.0};
+}
+
+/// Mean and max |‖p − c‖ − mean radius| of the extracted surface's vertices (voxels, h = 1).
+struct RadialStats {
+    double mean_radius = 0, max_deviation = 0;
+};
+inline RadialStats radial_stats(const Volume& v, const Vec3d& c) {
+    const Mesh m = extract_surface(v);
+    RadialStats s;
+    if (m.positions.empty()) return s;
+    for (const auto& p : m.positions) s.mean_radius += norm(Vec3d(p) - c);
+    s.mean_radius /= double(m.positions.size());
+    for (const auto& p : m.positions)
+        s.max_deviation = std::max(s.max_deviation, std::abs(norm(Vec3d(p) - c) - s.mean_radius));
+    return s;
 }
 
 }  // namespace normalflow::test

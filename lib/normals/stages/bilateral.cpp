@@ -76,10 +76,12 @@ public:
         for (int k = 0; k < 3; ++k) {
             copy_samples(S_.n[k], cur_[k]);
             fit_samples(next_[k], n);
-            fit_samples(guide_[k], n);
-            fit_samples(mean_[k], n);
+            if (guided_) {
+                fit_samples(guide_[k], n);
+                fit_samples(mean_[k], n);
+            }
         }
-        fit_samples(consistency_, n);
+        fit_samples(consistency_, n);  // the guidance's patch consistency; roughness's scratch
         const std::vector<std::int32_t>& act = band.active();
 
         for (int pass = 0; pass < c.opt.normal_steps; ++pass) {
@@ -115,7 +117,6 @@ private:
     /// count; noise that is left does.
     float roughness(const Band& band, float ks, float r2) {
         const std::size_t n = S_.size();
-        fit_samples(consistency_, n);
         band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
             float acc[32];
             for (std::size_t i = S_.begin(b); i < S_.end(b); ++i) {
