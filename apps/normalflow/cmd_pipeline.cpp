@@ -251,25 +251,30 @@ void add_smooth_command(CLI::App& app) {
     add_grid_options(cmd, a->pipeline);
     std::map<std::string, SmoothMode> modes;
     for (SmoothMode m : {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature,
-                         SmoothMode::Bilateral, SmoothMode::Guided})
+                         SmoothMode::Bilateral, SmoothMode::Guided, SmoothMode::TotalVariation})
         modes[to_string(m)] = m;
-    add_enum_option(cmd, "--mode", s.mode, modes, "bilateral | guided | anisotropic | isotropic | highboost | mcf");
+    add_enum_option(cmd, "--mode", s.mode, modes, "bilateral | guided | tv | anisotropic | isotropic | highboost | mcf");
     cmd->add_option("--iterations", s.iterations,
                     "main iterations (normal loop + refit); default: " +
                         std::to_string(default_iterations(SmoothMode::Anisotropic)) + " for anisotropic, " +
                         std::to_string(default_iterations(SmoothMode::Isotropic)) + " for the other modes")
         ->check(CLI::Range(1, 10000));
     cmd->add_option("--normal-steps", s.normal_steps,
-                    "normal-loop steps (bilateral, guided: filter passes) per main iteration; default: " +
+                    "normal-loop steps (bilateral, guided: filter passes; tv: solver iterations) per main iteration; "
+                    "default: " +
                         std::to_string(default_normal_steps(SmoothMode::Anisotropic)) + ", " +
-                        std::to_string(default_normal_steps(SmoothMode::Bilateral)) + " for bilateral and guided")
+                        std::to_string(default_normal_steps(SmoothMode::Bilateral)) + " for bilateral and guided, " +
+                        std::to_string(default_normal_steps(SmoothMode::TotalVariation)) + " for tv")
         ->check(CLI::Range(1, 10000));
     cmd->add_option("--length-scale", a->pipeline.length_scale,
-                    "bilateral, guided: the model's length unit in world units (default: the input's median edge length)")
+                    "bilateral, guided, tv: the model's length unit in world units (default: the input's median edge length)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--sigma-spatial", s.sigma_spatial, "bilateral, guided: spatial sigma in length units")
         ->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--sigma-range", s.sigma_range, "bilateral, guided: range sigma on the normals' chord")
+        ->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_option("--tv-lambda", s.tv_lambda,
+                    "tv: the fidelity's length in length units (larger: flatter, removes larger patches)")
         ->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--mu", s.mu, "anisotropic conductance scale, 1/voxel")->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_option("--alpha", s.alpha, "high-boost amount")->check(CLI::NonNegativeNumber)->capture_default_str();
@@ -280,7 +285,7 @@ void add_smooth_command(CLI::App& app) {
                     "anisotropic: raise mu to C times the robust noise scale of the curvature (0: the fixed mu)")
         ->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--refit-steps", s.refit_max_steps,
-                    "refit steps per main iteration at most (default: 40; bilateral, guided: a refit time of 1.4 length units squared)")
+                    "refit steps per main iteration at most (default: 40; bilateral, guided, tv: a refit time of 1.4 length units squared)")
         ->check(CLI::Range(1, 100000));
     cmd->add_option("--refit-tolerance", s.refit_tolerance,
                     "the refit stops when D falls by less than this fraction of itself in a step")
@@ -288,7 +293,7 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--refit-dt", s.refit_dt, "refit time step, voxel² (at most 1/6)")
         ->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_flag("!--no-preserve-volume", s.preserve_volume,
-                  "bilateral, guided: do not shift the surface back to the volume it had before each refit");
+                  "bilateral, guided, tv: do not shift the surface back to the volume it had before each refit");
     cmd->add_flag("--second-order", s.second_order_term, "add Appendix A's second term (Eq. 39) to the refit");
     cmd->add_option("--target-faces", a->pipeline.target_faces,
                     "decimate the result to at most N faces (CGAL edge collapse)")

@@ -248,7 +248,8 @@ int main(int argc, char** argv) {
                 };
                 const std::pair<const char*, SmoothMode> study_modes[] = {
                     {"iso", SmoothMode::Isotropic}, {"aniso", SmoothMode::Anisotropic},
-                    {"bilateral", SmoothMode::Bilateral}, {"guided", SmoothMode::Guided}};
+                    {"bilateral", SmoothMode::Bilateral}, {"guided", SmoothMode::Guided},
+                    {"tv", SmoothMode::TotalVariation}};
                 for (const auto& [token, mode] : study_modes) {
                     if (!wanted(token)) continue;
                     t0 = now_ms();

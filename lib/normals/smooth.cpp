@@ -35,6 +35,7 @@ const char* to_string(SmoothMode mode) {
         case SmoothMode::MeanCurvature: return "mcf";
         case SmoothMode::Bilateral: return "bilateral";
         case SmoothMode::Guided: return "guided";
+        case SmoothMode::TotalVariation: return "tv";
     }
     return "unknown";
 }
@@ -128,6 +129,8 @@ void validate(const Volume& v, const SmoothOptions& opt) {
         bad("sigma_spatial must be > 0, got " + std::to_string(opt.sigma_spatial));
     if (!(opt.sigma_range > 0.0f) || !std::isfinite(opt.sigma_range))
         bad("sigma_range must be > 0, got " + std::to_string(opt.sigma_range));
+    if (!(opt.tv_lambda > 0.0f) || !std::isfinite(opt.tv_lambda))
+        bad("tv_lambda must be > 0, got " + std::to_string(opt.tv_lambda));
     if (!(opt.mu > 0.0f) || !std::isfinite(opt.mu)) bad("mu must be > 0, got " + std::to_string(opt.mu));
     if (!(opt.alpha >= 0.0f) || !std::isfinite(opt.alpha)) bad("alpha must be >= 0, got " + std::to_string(opt.alpha));
     if (!(opt.normal_dt > 0.0f) || !std::isfinite(opt.normal_dt))
@@ -151,7 +154,8 @@ int default_iterations(SmoothMode mode) {
     switch (mode) {
         case SmoothMode::Anisotropic: return 16;
         case SmoothMode::Bilateral:
-        case SmoothMode::Guided: return kNeighbourhoodIterations;
+        case SmoothMode::Guided:
+        case SmoothMode::TotalVariation: return kNeighbourhoodIterations;
         default: return 8;
     }
 }
@@ -164,6 +168,7 @@ int default_refit_steps(const SmoothOptions& opt) {
 }
 
 int default_normal_steps(SmoothMode mode) {
+    if (mode == SmoothMode::TotalVariation) return kTotalVariationSteps;
     return is_neighbourhood_filter(mode) ? kNeighbourhoodPasses : 50;
 }
 

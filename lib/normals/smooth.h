@@ -25,14 +25,20 @@ enum class SmoothMode {
     Guided,         ///< the bilateral filter with its range weight on a guidance field, the mean
                     ///< normal of the most consistent patch near each sample (after Zhang, Deng,
                     ///< Zhang, Bouaziz & Liu 2015): creases stay sharp under heavy noise
+    TotalVariation, ///< total variation of the normal map on the surface with a fidelity term (the
+                    ///< paper's section 6), minimised by a primal–dual solver: piecewise-constant
+                    ///< normals, planar faces meeting at sharp creases (stages/total_variation.h)
 };
 
-/// Whether a mode is one of the neighbourhood filters (Bilateral, Guided): their parameters are in
-/// the model's units (SmoothOptions::length_scale).
-constexpr bool is_neighbourhood_filter(SmoothMode m) { return m == SmoothMode::Bilateral || m == SmoothMode::Guided; }
+/// Whether a mode is one of the filters on the surface samples (Bilateral, Guided, TotalVariation):
+/// their parameters are in the model's units (SmoothOptions::length_scale), they share the
+/// extension to the band, the refit's schedule, the volume constraint and the early stop.
+constexpr bool is_neighbourhood_filter(SmoothMode m) {
+    return m == SmoothMode::Bilateral || m == SmoothMode::Guided || m == SmoothMode::TotalVariation;
+}
 
 /// Name of a mode as the command line spells it: "isotropic", "anisotropic", "highboost", "mcf",
-/// "bilateral", "guided".
+/// "bilateral", "guided", "tv".
 const char* to_string(SmoothMode mode);
 
 /// Options of smooth_volume. Lengths and times are in voxel units (h = 1) unless stated.
@@ -65,6 +71,9 @@ struct SmoothOptions {
     float sigma_range = 0.35f;   ///< Bilateral, Guided: the range Gaussian's σ on the chord |N_i − N_j|
                                  ///< (0.35, as bilateral normal filtering: a 90° crease, chord 1.41, weighs
                                  ///< 3e-4; noise of 30°, chord 0.5, 0.36)
+    float tv_lambda = 0.25f;     ///< TotalVariation, > 0: 1/α, the fidelity's length, in units of
+                                 ///< length_scale: a patch of radius r whose normals differ by a chord δ
+                                 ///< from its surroundings goes when tv_lambda·ℓ >= δr/2
     float mu = 0.1f;             ///< 1/voxel, > 0: anisotropic conductance scale (paper: 0.1)
     float alpha = 1.0f;          ///< >= 0: high-boost gain (Eq. 22)
     float normal_dt = 0.1f;      ///< voxel², time step of the normal loop, > 0; values above the
@@ -110,15 +119,16 @@ struct SmoothOptions {
 };
 
 /// The main iterations smooth_volume runs for SmoothOptions::iterations = 0: 16 for Anisotropic,
-/// 8 for Isotropic, HighBoost and MeanCurvature, kNeighbourhoodIterations for Bilateral and Guided.
+/// 8 for Isotropic, HighBoost and MeanCurvature, kNeighbourhoodIterations for Bilateral, Guided
+/// and TotalVariation.
 int default_iterations(SmoothMode mode);
 /// The normal steps (filter passes) per main iteration for SmoothOptions::normal_steps = 0: 50, or
-/// kNeighbourhoodPasses for Bilateral and Guided.
+/// kNeighbourhoodPasses for Bilateral and Guided, kTotalVariationSteps for TotalVariation.
 int default_normal_steps(SmoothMode mode);
 
 /// SmoothOptions::length_scale = 0 means this many voxels.
 inline constexpr float kDefaultLengthScale = 4.0f;
-/// Bilateral and Guided with iterations = 0 run up to kNeighbourhoodIterations main iterations and
+/// Bilateral, Guided and TotalVariation with iterations = 0 run up to kNeighbourhoodIterations main iterations and
 /// stop after one whose filter left a roughness (SmoothIteration::roughness) below
 /// kNeighbourhoodRoughness: the normal map is then smooth at the disc's scale, and more filtering
 /// would only erode curved detail (measured on the study's pairs after one iteration: 0.013–0.017 on
@@ -127,6 +137,8 @@ inline constexpr float kDefaultLengthScale = 4.0f;
 inline constexpr int kNeighbourhoodIterations = 2;
 inline constexpr float kNeighbourhoodRoughness = 0.03f;
 inline constexpr int kNeighbourhoodPasses = 10;
+/// TotalVariation: primal–dual iterations per main iteration (its normal_steps' default).
+inline constexpr int kTotalVariationSteps = 100;
 inline constexpr float kNeighbourhoodRefitTime = 1.4f;
 
 /// The refit steps per main iteration for SmoothOptions::refit_max_steps = 0 (see there).
@@ -135,7 +147,9 @@ int default_refit_steps(const SmoothOptions& opt);
 /// What one main iteration of smooth_volume did (energies in voxel units).
 struct SmoothIteration {
     std::vector<double> normal_energy;  ///< G before each normal-loop step and after the last
-                                        ///< (normal_steps + 1 values; empty for MeanCurvature)
+                                        ///< (normal_steps + 1 values; empty for MeanCurvature;
+                                        ///< Bilateral, Guided: before and after the filter;
+                                        ///< TotalVariation: its objective E before and after its solve)
     std::vector<double> refit_energy;   ///< D of each refit iterate evaluated: before each step, plus
                                         ///< the result when the refit ran refit_max_steps (empty for
                                         ///< MeanCurvature)

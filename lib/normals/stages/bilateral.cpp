@@ -1,9 +1,11 @@
-// The neighbourhood filters of the normal map on the surface: bilateral (the band's counterpart of
-// bilateral normal filtering, Zheng, Fu, Au & Tai 2011) and guided (the range weight taken on a
-// guidance field of patch normals, after Zhang, Deng, Zhang, Bouaziz & Liu 2015). Both average the
-// normals of the samples next to the surface (SurfaceSamples: |φ| <= kShell, moved to their
-// closest points) over a disc whose size is given in the model's units (SmoothOptions::
-// length_scale), then carry the result to the rest of the active band by closest point.
+// The filters of the normal map on the surface samples: bilateral (the band's counterpart of
+// bilateral normal filtering, Zheng, Fu, Au & Tai 2011), guided (the range weight taken on a
+// guidance field of patch normals, after Zhang, Deng, Zhang, Bouaziz & Liu 2015) and total
+// variation (total_variation.h). Bilateral and guided average the normals of the samples next to
+// the surface (SurfaceSamples: |φ| <= kShell, moved to their closest points) over a disc whose size
+// is given in the model's units (SmoothOptions::length_scale); total variation minimises its
+// energy over the same samples. All three then carry the result to the rest of the active band by
+// closest point.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -17,6 +19,7 @@
 #include "normals/stages/normal_filter.h"
 #include "normals/stages/normal_loop.h"
 #include "normals/stages/surface_samples.h"
+#include "normals/stages/total_variation.h"
 
 namespace normalflow::engine {
 namespace {
@@ -54,9 +57,11 @@ bool normalised(const float (&acc)[32], float out[3]) {
     return true;
 }
 
+enum class Kind { Bilateral, Guided, TotalVariation };
+
 class NeighbourhoodFilter final : public NormalFilter {
 public:
-    explicit NeighbourhoodFilter(bool guided) : guided_(guided) {}
+    explicit NeighbourhoodFilter(Kind kind) : guided_(kind == Kind::Guided), tv_(kind == Kind::TotalVariation) {}
 
     void filter_normals(StageContext& c) override {
         Band& band = c.band;
@@ -84,7 +89,16 @@ public:
         fit_samples(consistency_, n);  // the guidance's patch consistency; roughness's scratch
         const std::vector<std::int32_t>& act = band.active();
 
-        for (int pass = 0; pass < c.opt.normal_steps; ++pass) {
+        if (tv_) {  // normal_energy: the total-variation objective before and after its solve
+            const float alpha = 1.0f / (c.opt.tv_lambda * ell);
+            tv_solver_.build(band, S_);
+            tv_solver_.solve(band, cur_, alpha, c.opt.normal_steps, [&] { c.ctl.poll(); });
+            energy.clear();
+            energy.push_back(tv_solver_.initial_energy());
+            energy.push_back(tv_solver_.energy(band, cur_, alpha));
+            c.ctl.tick(0.5);
+        }
+        for (int pass = 0; pass < (tv_ ? 0 : c.opt.normal_steps); ++pass) {
             c.ctl.poll();
             if (guided_) guidance(band, radius);
             const Samples(&range)[3] = guided_ ? guide_ : cur_;
@@ -106,7 +120,7 @@ public:
         }
         c.record().roughness = roughness(band, ks, r2);
         extend(c, ks, kr, r2);
-        energy.push_back(loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false));
+        if (!tv_) energy.push_back(loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false));
         c.record().normal_energy = std::move(energy);
     }
 
@@ -246,7 +260,8 @@ private:
         });
     }
 
-    bool guided_;
+    bool guided_, tv_;
+    TotalVariation tv_solver_;
     NormalLoop loop_;
     SurfaceSamples S_;
     Samples cur_[3], next_[3], guide_[3], mean_[3];
@@ -255,7 +270,10 @@ private:
 
 }  // namespace
 
-std::unique_ptr<NormalFilter> make_bilateral_filter() { return std::make_unique<NeighbourhoodFilter>(false); }
-std::unique_ptr<NormalFilter> make_guided_filter() { return std::make_unique<NeighbourhoodFilter>(true); }
+std::unique_ptr<NormalFilter> make_bilateral_filter() { return std::make_unique<NeighbourhoodFilter>(Kind::Bilateral); }
+std::unique_ptr<NormalFilter> make_guided_filter() { return std::make_unique<NeighbourhoodFilter>(Kind::Guided); }
+std::unique_ptr<NormalFilter> make_total_variation_filter() {
+    return std::make_unique<NeighbourhoodFilter>(Kind::TotalVariation);
+}
 
 }  // namespace normalflow::engine

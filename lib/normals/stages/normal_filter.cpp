@@ -9,6 +9,7 @@ std::unique_ptr<NormalFilter> make_normal_filter(SmoothMode mode) {
         case SmoothMode::HighBoost: return make_highboost_filter();
         case SmoothMode::Bilateral: return make_bilateral_filter();
         case SmoothMode::Guided: return make_guided_filter();
+        case SmoothMode::TotalVariation: return make_total_variation_filter();
         case SmoothMode::MeanCurvature: return nullptr;
     }
     return nullptr;

@@ -27,6 +27,7 @@ std::unique_ptr<NormalFilter> make_anisotropic_filter();  ///< Perona–Malik (E
 std::unique_ptr<NormalFilter> make_highboost_filter();    ///< isotropic, then Eq. 21–22
 std::unique_ptr<NormalFilter> make_bilateral_filter();    ///< bilateral.cpp
 std::unique_ptr<NormalFilter> make_guided_filter();       ///< bilateral.cpp, guided range
+std::unique_ptr<NormalFilter> make_total_variation_filter();  ///< bilateral.cpp, total_variation.h
 
 /// The filter of a mode; nullptr for MeanCurvature (no normals).
 std::unique_ptr<NormalFilter> make_normal_filter(SmoothMode mode);
