@@ -61,9 +61,11 @@ struct SmoothOptions {
                                  ///< and needs the longer loop).
                                  ///< MeanCurvature: explicit curvature steps per main iteration.
                                  ///< Bilateral, Guided: filter passes per main iteration.
+                                 ///< TotalVariation: primal–dual iterations per main iteration.
     float length_scale = 0.0f;   ///< voxels, >= 0: the model's length unit ℓ, the scale of its noise and
                                  ///< of its smallest features: smooth_mesh sets it to the input's median
-                                 ///< edge length. Bilateral and Guided size their disc by it, so a finer
+                                 ///< edge length. Bilateral, Guided and TotalVariation size their disc and
+                                 ///< fidelity by it, so a finer
                                  ///< grid gives the same result. 0: kDefaultLengthScale.
     float sigma_spatial = 0.6f;  ///< Bilateral, Guided: the spatial Gaussian's σ in units of
                                  ///< length_scale (0.6: about the distance between the centroids of two
@@ -82,13 +84,13 @@ struct SmoothOptions {
     float refit_dt = 0.1f;       ///< voxel², time step of the refit and of mean curvature flow, > 0;
                                  ///< clamped to 1/6 (explicit second-order flow) with a warning
     int refit_max_steps = 0;     ///< >= 0: refit steps per main iteration at most; 0: the mode's default,
-                                 ///< default_refit_steps: 40 for the diffusions; for Bilateral and
-                                 ///< Guided a refit time of kNeighbourhoodRefitTime·ℓ² (ℓ =
+                                 ///< default_refit_steps: 40 for the diffusions; for the surface-sample
+                                 ///< filters (is_neighbourhood_filter) a refit time of kNeighbourhoodRefitTime·ℓ² (ℓ =
                                  ///< length_scale in voxels), at least 40: a surface wave an edge long
                                  ///< needs a time ∝ ℓ² to follow its filtered normals
     double refit_tolerance = 1e-4;  ///< >= 0: the refit stops when D decreases by less than this
                                     ///< fraction of itself in one step (0: until D stops decreasing).
-                                    ///< Bilateral and Guided: when D has not reached a new low by this
+                                    ///< The surface-sample filters: when D has not reached a new low by this
                                     ///< fraction for max(5, refit_max_steps/20) steps.
     int conductance_presmooth_steps = 25;  ///< >= 0, Anisotropic only: κ² for the conductance g is
         ///< taken from the normals pre-smoothed by this many isotropic steps of normal_dt (Catté,
@@ -107,7 +109,7 @@ struct SmoothOptions {
         ///< Resolution 256, anisotropic, mean normal error, fixed → 1.0: fandisk_n0.7 27.8° → 16.4°,
         ///< twelve_imp0.5 14.8° → 12.3°, fandisk_n0.3 8.25° → 8.25°, block_n0.4 9.71° → 9.66°
         ///< (1.5: 16.4°, –, –, 10.2°).
-    bool preserve_volume = true;  ///< Bilateral, Guided: after each refit, shift φ by a constant so that
+    bool preserve_volume = true;  ///< Bilateral, Guided, TotalVariation: after each refit, shift φ by a constant so that
                                   ///< the enclosed volume is what it was before it (the refit of a
                                   ///< filtered normal map shrinks convex parts a little, −0.1…−1.4% on
                                   ///< the study's CAD pairs without this)
@@ -159,7 +161,7 @@ struct SmoothIteration {
     float mu = 0;                       ///< Anisotropic: the conductance scale µ used (1/voxel); 0 for
                                         ///< the other modes
     float volume_shift = 0;             ///< voxels: the shift preserve_volume applied (positive: outwards)
-    float roughness = 0;                ///< Bilateral, Guided: what the filter left, the 75th percentile of
+    float roughness = 0;                ///< Bilateral, Guided, TotalVariation: what the filter left, the 75th percentile of
                                         ///< |N_i − M_i| over the surface samples, M_i the plain Gaussian mean
                                         ///< of the filtered normals over i's disc (0 for the other modes)
     std::size_t band_voxels = 0;        ///< samples processed (the active band)
@@ -183,7 +185,7 @@ struct SmoothReport {
     double seconds_reinit = 0;   ///< total wall seconds moving the band and reinitialising φ
     std::vector<std::string> warnings;
 
-    bool stopped_smooth = false;     ///< Bilateral, Guided with iterations = 0: stopped before
+    bool stopped_smooth = false;     ///< the surface-sample filters with iterations = 0: stopped before
                                      ///< kNeighbourhoodIterations because an iteration's filter left a
                                      ///< roughness below kNeighbourhoodRoughness
     int iterations_run() const { return int(iterations.size()); }
@@ -203,7 +205,7 @@ struct SmoothReport {
 /// MeanCurvature runs ∂φ/∂t = |∇φ| H_φ instead of (1)–(3). Bilateral and Guided replace (2): the
 /// samples with |φ| <= 0.75 voxel, moved to their closest points x − φN, are filtered by
 /// normal_steps passes of a bilateral (or guided) average over a disc of radius 2·sigma_spatial·
-/// length_scale, and every other active sample takes the filtered normals around its closest point;
+/// length_scale (TotalVariation: normal_steps primal–dual iterations of its objective), and every other active sample takes the filtered normals around its closest point;
 /// their refit (3) runs for a time in model units (default_refit_steps) and, with preserve_volume,
 /// is followed by a uniform shift of φ that restores the enclosed volume. A main iteration whose refit keeps no
 /// step leaves φ unchanged, so every later one would repeat it: the run stops there

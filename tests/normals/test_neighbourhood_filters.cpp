@@ -22,12 +22,11 @@ namespace {
 using test::add_noise;
 using test::box_normal_error;
 using test::box_sdf;
+using test::bumpy_box;
 using test::BoxNormalError;
 using test::equivalent_radius;
 using test::make_volume;
 using test::sphere_sdf;
-
-constexpr double kPi = 3.14159265358979323846;
 
 SmoothOptions options(SmoothMode mode, float length_scale = 4.0f) {
     SmoothOptions o;
@@ -110,15 +109,6 @@ TEST(NeighbourhoodFilters, CleanBoxIsHarmedLessThanByTheDiffusions) {
         EXPECT_LT(r.near_edges, 0.75 * ea.near_edges) << to_string(mode);
         EXPECT_LT(r.on_faces, 3.0) << to_string(mode);
     }
-}
-
-/// A box with bumps fixed in world units: the same surface at every voxel size.
-test::Sdf bumpy_box(const Vec3d& c, const Vec3d& e, double amplitude, double wavelength) {
-    const test::Sdf box = box_sdf(c, e);
-    const double w = 2.0 * kPi / wavelength;
-    return [=](const Vec3d& p) {
-        return box(p) + amplitude * std::sin(w * p.x + 0.3) * std::sin(w * p.y + 1.1) * std::sin(w * p.z + 0.7);
-    };
 }
 
 TEST(NeighbourhoodFilters, FinerGridIsNoWorse) {

@@ -22,6 +22,7 @@ namespace {
 
 using test::add_noise;
 using test::box_sdf;
+using test::bumpy_box;
 using test::make_volume;
 
 constexpr double kDeg = 180.0 / 3.14159265358979323846;
@@ -161,15 +162,6 @@ TEST(TotalVariation, SphereDoesNotDrift) {
     std::printf("tv sphere: r0 %.4f r1 %.4f, max radial deviation %.4f (voxels)\n", r0, r1, dev);
     EXPECT_LT(std::abs(r1 - r0), 0.05);
     EXPECT_LT(dev, 0.5);  // total variation makes a sphere faceted (piecewise-constant normals), not smaller
-}
-
-/// A box with bumps fixed in world units: the same surface at every voxel size.
-test::Sdf bumpy_box(const Vec3d& c, const Vec3d& e, double amplitude, double wavelength) {
-    const test::Sdf box = box_sdf(c, e);
-    const double w = 2.0 * 3.14159265358979323846 / wavelength;
-    return [=](const Vec3d& p) {
-        return box(p) + amplitude * std::sin(w * p.x + 0.3) * std::sin(w * p.y + 1.1) * std::sin(w * p.z + 0.7);
-    };
 }
 
 TEST(TotalVariation, FinerGridIsNoWorse) {

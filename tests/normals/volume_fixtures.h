@@ -61,6 +61,15 @@ inline Sdf box_sdf(const Vec3d& c, const Vec3d& e) {
 }
 
 /// Deterministic hash noise in [-1, 1] per integer lattice point.
+/// A box with bumps fixed in world units: the same surface at every voxel size.
+inline Sdf bumpy_box(const Vec3d& c, const Vec3d& e, double amplitude, double wavelength) {
+    const Sdf box = box_sdf(c, e);
+    const double w = 2.0 * 3.14159265358979323846 / wavelength;
+    return [=](const Vec3d& p) {
+        return box(p) + amplitude * std::sin(w * p.x + 0.3) * std::sin(w * p.y + 1.1) * std::sin(w * p.z + 0.7);
+    };
+}
+
 inline double hash_noise(int i, int j, int k, std::uint32_t seed) {
     std::uint32_t hsh = seed * 0x9E3779B9u;
     hsh ^= std::uint32_t(i) * 0x85EBCA6Bu;
