@@ -20,7 +20,7 @@ import sys
 import tempfile
 import time
 
-MODES = ["isotropic", "anisotropic", "highboost", "mcf", "bilateral", "guided"]
+MODES = ["isotropic", "anisotropic", "highboost", "mcf", "bilateral", "guided", "tv"]
 MESH_EXT = (".obj", ".ply", ".off", ".stl", ".glb", ".gltf", ".drc")
 failures = []
 
