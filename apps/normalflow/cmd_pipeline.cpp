@@ -215,6 +215,7 @@ int run_smooth(const SmoothArgs& a) {
     write_result(a.output, m, progress, j, a.draco);
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles, " +
+                  (r.connectivity_kept ? "the input's mesh, fitted, " : "") +
                   std::to_string(int(total.seconds() * 10) / 10.0).substr(0, 5) + " s)");
     return 0;
 }
@@ -295,6 +296,20 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_flag("!--no-preserve-volume", s.preserve_volume,
                   "bilateral, guided, tv: do not shift the surface back to the volume it had before each refit");
     cmd->add_flag("--second-order", s.second_order_term, "add Appendix A's second term (Eq. 39) to the refit");
+    const std::map<std::string, Connectivity> connectivity = {
+        {"auto", Connectivity::Auto}, {"keep", Connectivity::Keep}, {"remesh", Connectivity::Remesh}};
+    add_enum_option(cmd, "--connectivity", a->pipeline.connectivity, connectivity,
+                    "keep: the input's own mesh, its vertices moved onto the result; remesh: a new closed mesh "
+                    "extracted from it; auto (default): keep for an open input, remesh for a closed one");
+    cmd->add_option("--relax-steps", a->pipeline.fit.relax_steps,
+                    "keep: tangential relaxation iterations (untangle what noise moved along the surface)")
+        ->check(CLI::Range(0, 100000))->capture_default_str();
+    cmd->add_option("--fit-steps", a->pipeline.fit.vertex_steps,
+                    "keep: vertex-update iterations turning the faces to the result's normals")
+        ->check(CLI::Range(0, 100000))->capture_default_str();
+    cmd->add_option("--boundary-rings", a->pipeline.fit.boundary_rings,
+                    "keep: an open boundary stays, and the vertices within this many edge rings of it move partly")
+        ->check(CLI::Range(0, 100000))->capture_default_str();
     cmd->add_option("--target-faces", a->pipeline.target_faces,
                     "decimate the result to at most N faces (CGAL edge collapse)")
         ->check(CLI::Range(std::size_t(4), std::size_t(1) << 40));

@@ -1,5 +1,5 @@
 // nf_bench_study [DATA_DIR] [--samples N] [--resolution R] [--threads T] [--only SUBSTRING]...
-//                [--no-normalflow] [--modes aniso,bilateral,default] [--csv FILE] [--md FILE]
+//                [--no-normalflow] [--modes aniso,bilateral,default] (also: iso, guided, tv, keep, remesh) [--csv FILE] [--md FILE]
 // The comparison study of issue 6 on every noisy/ground-truth pair of shared/data: pairs_gnf, pairs_gcn
 // and pairs_nllr (DATA_DIR is shared/data). For each noisy mesh:
 //   - the noisy input itself;
@@ -257,14 +257,20 @@ int main(int argc, char** argv) {
                     add(std::string("normalflow ") + to_string(mode), "R=" + std::to_string(resolution) + ", defaults",
                         now_ms() - t0, m);
                 }
-                if (wanted("default")) {
+                // the pipeline's defaults (what `normalflow smooth IN OUT` runs), and with each
+                // connectivity forced
+                const std::pair<const char*, Connectivity> pipelines[] = {
+                    {"default", Connectivity::Auto}, {"keep", Connectivity::Keep}, {"remesh", Connectivity::Remesh}};
+                for (const auto& [token, connectivity] : pipelines) {
+                    if (!wanted(token)) continue;
                     t0 = now_ms();
                     const PipelineOptions defaults;
                     PipelineOptions o = defaults;
-                    o.scan.resolution = 0;
+                    o.connectivity = connectivity;
                     o.scan.threads = o.smooth.threads = threads;
                     const PipelineResult res = smooth_mesh(noisy, o);
-                    add(std::string("normalflow default (") + to_string(defaults.smooth.mode) + ")",
+                    add(std::string("normalflow ") + token + " (" + to_string(defaults.smooth.mode) + ", " +
+                            (res.report.connectivity_kept ? "kept" : "remeshed") + ")",
                         "R=auto " + std::to_string(res.report.scan_options.resolution), now_ms() - t0, res.mesh);
                 }
             }

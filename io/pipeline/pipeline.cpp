@@ -76,6 +76,12 @@ void validate(const PipelineOptions& o) {
         if (m.threads < 0) bad_option("smooth.threads", str(m.threads), ">= 0");
     }
     if (!std::isfinite(o.extract.iso)) bad_option("extract.iso", str(o.extract.iso), "a finite value");
+    if (o.connectivity == Connectivity::Keep && o.target_faces > 0)
+        throw InvalidInput("smooth_mesh: target_faces (--target-faces) re-meshes: it needs connectivity remesh or auto");
+    if (o.fit.projection_steps < 0) bad_option("fit.projection_steps", str(o.fit.projection_steps), ">= 0");
+    if (o.fit.relax_steps < 0) bad_option("fit.relax_steps", str(o.fit.relax_steps), ">= 0");
+    if (o.fit.vertex_steps < 0) bad_option("fit.vertex_steps", str(o.fit.vertex_steps), ">= 0");
+    if (o.fit.boundary_rings < 0) bad_option("fit.boundary_rings", str(o.fit.boundary_rings), ">= 0");
     if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
 #ifndef NORMALFLOW_HAS_CGAL
     if (o.target_faces > 0)
@@ -207,6 +213,14 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
     return m;
 }
 
+const char* to_string(Connectivity c) {
+    switch (c) {
+        case Connectivity::Keep: return "keep";
+        case Connectivity::Remesh: return "remesh";
+        default: return "auto";
+    }
+}
+
 double model_length_scale(const Mesh& m) {
     std::vector<double> len;
     len.reserve(m.triangles.size() * 3);
@@ -240,7 +254,23 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.seconds.smooth = clock.lap();
         r.seconds.total += r.seconds.smooth;
     }
-    result.mesh = volume_to_mesh(v, o, &r, progress);
+    const bool keep = o.connectivity == Connectivity::Keep ||
+                      (o.connectivity == Connectivity::Auto && o.target_faces == 0 && has_open_boundary(m));
+    if (!keep) {
+        result.mesh = volume_to_mesh(v, o, &r, progress);
+        return result;
+    }
+    Stopwatch clock;
+    detail::begin(progress, "fit");
+    result.mesh = m;
+    r.fit = fit_mesh_to_volume(result.mesh, v, o.fit);
+    r.connectivity_kept = true;
+    if (r.fit.outside_band > 0)
+        r.warnings.push_back(std::to_string(r.fit.outside_band) +
+                             " vertices were outside the volume's band and stayed where they were");
+    r.seconds.extract = clock.lap();
+    r.seconds.total += r.seconds.extract;
+    r.peak_memory_bytes = peak_memory_bytes();
     return result;
 }
 

@@ -13,6 +13,7 @@
 #include "core/progress.h"
 #include "core/volume.h"
 #include "extract/extract_surface.h"
+#include "extract/fit_mesh.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #include "io/pipeline/system_memory.h"
@@ -47,6 +48,17 @@ inline constexpr int kAutoResolutionMin = 128;
 inline constexpr int kAutoResolutionMax = 512;
 
 /// Options of smooth_mesh (and of its halves, mesh_to_volume and volume_to_mesh).
+/// What smooth_mesh hands back.
+enum class Connectivity {
+    Auto,    ///< Keep for an open input (has_open_boundary), Remesh for a closed one
+    Keep,    ///< the input mesh itself, its vertices moved onto the processed surface (fit_mesh_to_volume):
+             ///< the same vertices, faces and order, open where the input was open
+    Remesh,  ///< the extracted zero level set: a new mesh, closed and manifold
+};
+
+/// "auto", "keep", "remesh".
+const char* to_string(Connectivity c);
+
 struct PipelineOptions {
     /// Scan conversion: resolution (0: automatic, auto_resolution) or voxel size, band half-width (raised to
     /// kSmoothingScanBandVoxels when smoothing), shell thickness, threads.
@@ -66,6 +78,12 @@ struct PipelineOptions {
     /// World units, >= 0: the model's length unit for the engine (SmoothOptions::length_scale);
     /// 0: the median edge length of the input (model_length_scale).
     double length_scale = 0;
+    /// What comes back: the input's own mesh fitted to the result, or a new one extracted from it.
+    /// Auto keeps an open input's (the volume closes it; an extraction would be a closed blob with the
+    /// cap) and re-meshes a closed one. Keep refuses target_faces.
+    Connectivity connectivity = Connectivity::Auto;
+    /// The fit of the input's mesh (Connectivity::Keep).
+    FitOptions fit;
     /// Extraction of the zero level set.
     ExtractOptions extract;
     /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (CGAL edge collapse,
@@ -81,7 +99,7 @@ struct PipelineSeconds {
     double repair = 0;
     double voxelize = 0;  ///< memory check and scan conversion (distance-query build included)
     double smooth = 0;
-    double extract = 0;
+    double extract = 0;   ///< extraction, or the fit of the input's mesh when its connectivity is kept
     double decimate = 0;
     double total = 0;
 };
@@ -97,7 +115,9 @@ struct PipelineReport {
     double length_scale = 0;     ///< world units: the model length unit the engine ran with (0: not smoothed)
     bool smoothed = false;       ///< smooth_volume ran
     SmoothReport smooth;         ///< valid when smoothed
-    ExtractReport extract;
+    ExtractReport extract;       ///< valid when !connectivity_kept
+    bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
+    FitReport fit;               ///< valid when connectivity_kept
     bool decimated = false;      ///< decimation ran (target_faces > 0)
     cgal::CleanupReport decimate;  ///< valid when decimated
     PipelineSeconds seconds;
@@ -119,7 +139,9 @@ struct PipelineResult {
 /// scanned (a remeshing).
 ///
 /// Accepted input: what scan_convert accepts (any triangle soup; open sheets need
-/// scan.shell_thickness). The result is closed and manifold (before decimation by construction).
+/// scan.shell_thickness). The re-meshed result is closed and manifold (before decimation by
+/// construction); with options.connectivity Keep (Auto: for an open input) it is m itself with its
+/// vertices moved (fit_mesh_to_volume), as open as m was.
 /// \throw InvalidInput for bad options (the message names the field, e.g. "smooth.mu"), a mesh
 ///        scan_convert refuses, or a surface that vanished during smoothing;
 ///        OutOfMemory when the estimated peak exceeds the limit (check_memory);

@@ -109,7 +109,16 @@ Json to_json(const PipelineReport& r) {
     vox.set("band_half_width", r.scan_options.half_width);
     j.set("voxelize", vox);
     if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
-    j.set("extract", to_json(r.extract));
+    j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");
+    if (r.connectivity_kept) {
+        Json f = Json::object();
+        f.set("vertices", r.fit.vertices).set("boundary_vertices", r.fit.boundary_vertices)
+            .set("outside_band", r.fit.outside_band).set("mean_distance", r.fit.mean_distance)
+            .set("max_distance", r.fit.max_distance).set("mean_face_angle_deg", r.fit.mean_face_angle_deg);
+        j.set("fit", f);
+    } else {
+        j.set("extract", to_json(r.extract));
+    }
     if (r.decimated) j.set("decimate", to_json(r.decimate));
     Json s = Json::object();
     s.set("repair", r.seconds.repair).set("voxelize", r.seconds.voxelize).set("smooth", r.seconds.smooth)

@@ -235,7 +235,63 @@ TEST(Pipeline, BadOptionsThrowInvalidInputNamingTheField) {
     expect_field("smooth.mu", [](PipelineOptions& o) { o.smooth.mu = -0.1f; });
     expect_field("smooth.alpha", [](PipelineOptions& o) { o.smooth.alpha = std::nanf(""); });
     expect_field("target_faces", [](PipelineOptions& o) { o.target_faces = 2; });
+    expect_field("fit.vertex_steps", [](PipelineOptions& o) { o.fit.vertex_steps = -1; });
+    expect_field("fit.boundary_rings", [](PipelineOptions& o) { o.fit.boundary_rings = -1; });
     EXPECT_NO_THROW(validate(PipelineOptions{}));
+}
+
+/// An icosphere with the faces whose centroids are below z = -0.8 r removed: open, one hole.
+Mesh holed_sphere(double r, int levels) {
+    const Mesh full = test::icosphere(r, levels);
+    Mesh m;
+    m.positions = full.positions;
+    for (const Tri& t : full.triangles) {
+        const double z = (full.positions[t[0]].z + full.positions[t[1]].z + full.positions[t[2]].z) / 3.0;
+        if (z > -0.8 * r) m.triangles.push_back(t);
+    }
+    return m;
+}
+
+TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
+    PipelineOptions o = quick_options();
+    const Mesh open = holed_sphere(1.0, 3);
+    const MeshReport before = mesh_report(open);
+    ASSERT_GT(before.boundary_edges, 0u);
+    const PipelineResult kept = smooth_mesh(open, o);
+    EXPECT_TRUE(kept.report.connectivity_kept);
+    EXPECT_EQ(kept.mesh.triangles, open.triangles);  // the same faces, in the same order
+    ASSERT_EQ(kept.mesh.positions.size(), open.positions.size());
+    const MeshReport after = mesh_report(kept.mesh);
+    EXPECT_EQ(after.boundary_edges, before.boundary_edges);  // open in, open out
+    EXPECT_EQ(kept.report.fit.boundary_vertices, before.boundary_edges);  // one loop: as many vertices as edges
+    // the vertices moved (onto the processed surface) but not far
+    double moved = 0, worst = 0;
+    for (std::size_t i = 0; i < open.positions.size(); ++i) {
+        const double d = norm(Vec3d(kept.mesh.positions[i]) - Vec3d(open.positions[i]));
+        moved += d;
+        worst = std::max(worst, d);
+    }
+    EXPECT_GT(moved, 0.0);
+    EXPECT_LT(worst, 0.1);
+    EXPECT_NE(to_json(kept.report).dump().find("\"connectivity\":\"kept\""), std::string::npos);
+
+    const PipelineResult closed = smooth_mesh(test::icosphere(1.0, 3), o);
+    EXPECT_FALSE(closed.report.connectivity_kept);
+    EXPECT_TRUE(mesh_report(closed.mesh).closed);
+
+    // forced either way
+    o.connectivity = Connectivity::Remesh;
+    const PipelineResult remeshed = smooth_mesh(open, o);
+    EXPECT_FALSE(remeshed.report.connectivity_kept);
+    EXPECT_NE(remeshed.mesh.triangles.size(), open.triangles.size());
+    o.connectivity = Connectivity::Keep;
+    const PipelineResult sphere_kept = smooth_mesh(test::icosphere(1.0, 3), o);
+    EXPECT_TRUE(sphere_kept.report.connectivity_kept);
+    EXPECT_EQ(sphere_kept.mesh.triangles, test::icosphere(1.0, 3).triangles);
+    // keeping the mesh and decimating it contradict each other
+    o.target_faces = 100;
+    const std::string msg = message_of<InvalidInput>([&] { (void)smooth_mesh(open, o); });
+    EXPECT_NE(msg.find("target_faces"), std::string::npos) << msg;
 }
 
 TEST(Pipeline, EmptyVolumeMessages) {
