@@ -45,22 +45,13 @@ struct BoxFaces {
 BoxFaces box_faces(const Mesh& m, const Vec3d& c, const Vec3d& e, double reach) {
     std::array<Vec3d, 6> sum{};
     std::array<double, 6> area{};
-    auto classify = [&](const std::array<std::uint32_t, 3>& t, Vec3d& n, double& a) {
-        const Vec3d p0(m.positions[t[0]]), p1(m.positions[t[1]]), p2(m.positions[t[2]]);
-        const Vec3d cr = cross(p1 - p0, p2 - p0);
-        a = 0.5 * norm(cr);
-        if (a <= 0) return -1;
-        n = cr / (2 * a);
-        const Vec3d p = (p0 + p1 + p2) / 3.0 - c;
-        double q[3];
-        int axis = 0;
-        for (int k = 0; k < 3; ++k) {
-            q[k] = std::abs(p[k]) - e[k];
-            if (q[k] > q[axis]) axis = k;
-        }
-        for (int k = 0; k < 3; ++k)
-            if (k != axis && q[k] > -reach) return -1;  // near an edge
-        return 2 * axis + (p[axis] < 0 ? 0 : 1);
+    // the face a triangle lies on, away from the edges (-1: near an edge, or of zero area)
+    auto classify = [&](const Tri& t, Vec3d& n, double& a) {
+        test::BoxTriangle bt;
+        if (!test::box_triangle(m, t, c, e, reach, bt) || bt.near != 1) return -1;
+        n = bt.normal;
+        a = bt.area;
+        return 2 * bt.axis + (bt.side < 0 ? 0 : 1);
     };
     for (const auto& t : m.triangles) {
         Vec3d n;

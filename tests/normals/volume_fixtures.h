@@ -166,6 +166,37 @@ inline double total_curvature(const Volume& v) {
     return sum;
 }
 
+/// A triangle of a mesh against a box (centre c, half extents e): its unit normal and area, the box
+/// face nearest its centroid (axis, and side: -1 or +1), and how many of the box's three slabs
+/// |p_k - c_k| > e_k - reach its centroid lies in (1: on a flat part, 2: within reach of an edge,
+/// 3: of a corner).
+struct BoxTriangle {
+    Vec3d normal;
+    double area = 0;
+    int axis = 0;
+    double side = 1;
+    int near = 0;
+};
+/// False for a triangle of zero area.
+inline bool box_triangle(const Mesh& m, const Tri& t, const Vec3d& c, const Vec3d& e, double reach, BoxTriangle& out) {
+    const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), d(m.positions[t[2]]);
+    const Vec3d cr = cross(b - a, d - a);
+    out.area = 0.5 * norm(cr);
+    if (out.area <= 0) return false;
+    out.normal = cr / (2 * out.area);
+    const Vec3d p = (a + b + d) / 3.0 - c;
+    double q[3];
+    out.axis = 0;
+    for (int k = 0; k < 3; ++k) {
+        q[k] = std::abs(p[k]) - e[k];
+        if (q[k] > q[out.axis]) out.axis = k;
+    }
+    out.near = 0;
+    for (int k = 0; k < 3; ++k) out.near += q[k] > -reach;
+    out.side = p[out.axis] < 0 ? -1.0 : 1.0;
+    return true;
+}
+
 /// Mean angle (degrees) between the face normals of the extracted mesh and the true normal of the
 /// nearest box face, over triangles within `reach` voxels of an edge of the box (not near a corner),
 /// and over triangles on the flat parts.
@@ -175,29 +206,17 @@ struct BoxNormalError {
 inline BoxNormalError box_normal_error(const Mesh& m, const Vec3d& c, const Vec3d& e, double reach) {
     double sum_e = 0, sum_f = 0, area_e = 0, area_f = 0;
     for (const auto& t : m.triangles) {
-        const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), d(m.positions[t[2]]);
-        const Vec3d cr = cross(b - a, d - a);
-        const double area = 0.5 * norm(cr);
-        if (area <= 0) continue;
-        const Vec3d n = cr / (2 * area);
-        const Vec3d p = (a + b + d) / 3.0 - c;
-        double q[3];
-        int axis = 0;
-        for (int k = 0; k < 3; ++k) {
-            q[k] = std::abs(p[k]) - e[k];
-            if (q[k] > q[axis]) axis = k;
-        }
-        int near = 0;
-        for (int k = 0; k < 3; ++k) near += q[k] > -reach;
+        BoxTriangle bt;
+        if (!box_triangle(m, t, c, e, reach, bt)) continue;
         Vec3d truth(0, 0, 0);
-        truth[axis] = p[axis] < 0 ? -1.0 : 1.0;
-        const double ang = std::acos(std::clamp(dot(n, truth), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
-        if (near == 2) {
-            sum_e += ang * area;
-            area_e += area;
-        } else if (near == 1) {
-            sum_f += ang * area;
-            area_f += area;
+        truth[bt.axis] = bt.side;
+        const double ang = std::acos(std::clamp(dot(bt.normal, truth), -1.0, 1.0)) * 180.0 / 3.14159265358979323846;
+        if (bt.near == 2) {
+            sum_e += ang * bt.area;
+            area_e += bt.area;
+        } else if (bt.near == 1) {
+            sum_f += ang * bt.area;
+            area_f += bt.area;
         }
     }
     return {area_e > 0 ? sum_e / area_e : 180.0, area_f > 0 ? sum_f / area_f : 180.0};
