@@ -2,12 +2,16 @@
 /// \file compare.h
 /// Comparing a candidate mesh (a smoothing result) with a reference (the ground truth or the input)
 /// without vertex correspondence: level-set output has new connectivity, so every measure here
-/// works on the surfaces, not on vertex pairs.
+/// works on the surfaces, not on vertex pairs. The one exception, correspondence_errors, is for a
+/// candidate that kept the reference's connectivity (a mesh-side filter, the pipeline's
+/// Connectivity::Keep, against the ground truth of the same noisy pair): face i against face i,
+/// vertex i against vertex i, as mesh-denoising papers report their results.
 ///
 /// Self-intersections need exact predicates (CGAL) and are not measured here: the CLI adds them
 /// with io/cgal/repair.h count_self_intersections.
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,10 +65,48 @@ struct CreasePreservation {
 /// the k faces near it; TBB-parallel over samples, deterministic.
 CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& reference, const CreaseOptions& opt = {});
 
+/// Errors of a candidate against a reference with the same vertices and triangles in the same order
+/// (see correspondence_errors).
+struct CorrespondenceErrors {
+    std::size_t faces = 0;               ///< triangles compared (non-degenerate in both meshes)
+    std::size_t degenerate_faces = 0;    ///< triangles skipped: zero area (or a repeated index) in either mesh
+    double mean_face_angle_deg = 0.0;    ///< unweighted mean over the compared faces, degrees; 0 if none
+    double max_face_angle_deg = 0.0;     ///< largest face angle, degrees
+    std::size_t vertices = 0;            ///< vertices compared: every position, referenced or not
+    double mean_vertex_distance = 0.0;   ///< mean over vertices of |p_i − q_i|, world units
+    double max_vertex_distance = 0.0;    ///< largest |p_i − q_i|, world units
+    double reference_diagonal = 0.0;     ///< bounding-box diagonal of the reference, world units
+    double mean_vertex_distance_relative = 0.0;  ///< mean_vertex_distance / reference_diagonal (0 if the diagonal is)
+    double max_vertex_distance_relative = 0.0;   ///< max_vertex_distance / reference_diagonal
+};
+
+/// Why candidate and reference do not correspond vertex for vertex and face for face, as the end of
+/// an error message ("candidate has 1200 triangles, reference 1180", "candidate has 610 vertices,
+/// reference 600", "triangle 17 differs: candidate (3, 4, 9), reference (3, 9, 4)"); an empty string
+/// when they do: the same number of positions and the same triangle index lists in the same order.
+/// Checks counts and indices only (not their range, not the positions). Cost: one pass over the triangles.
+std::string correspondence_mismatch(const Mesh& candidate, const Mesh& reference);
+
+/// Face-by-face and vertex-by-vertex errors of candidate against reference, which must share their
+/// connectivity (correspondence_mismatch is empty), the measures of the mesh-denoising literature:
+///  - face angle: the angle between the unit normals of triangle i in candidate and in reference
+///    (atan2(|n × m|, n · m), accurate at small angles), averaged over triangles without area weights.
+///    A triangle with zero area (or a repeated index) in either mesh has no normal: it is skipped and
+///    counted in degenerate_faces;
+///  - vertex distance: |p_i − q_i| over every position i, mean and max, in world units and relative to
+///    the reference's bounding-box diagonal.
+/// \throw InvalidInput "correspondence_errors: candidate has 1200 triangles, reference 1180" (any
+///        correspondence_mismatch), or when a mesh has no triangles, bad indices or non-finite positions.
+/// Cost: one pass over the triangles and one over the positions; single-threaded, deterministic.
+CorrespondenceErrors correspondence_errors(const Mesh& candidate, const Mesh& reference);
+
 /// Options of compare_meshes.
 struct CompareOptions {
     SurfaceSamplingOptions sampling;  ///< how surface_distance samples the two surfaces
     CreaseOptions crease;             ///< crease preservation protocol
+    /// Also measure correspondence_errors (MeshComparison::correspondence); the candidate must then have
+    /// the reference's vertex count and triangles, else compare_meshes throws InvalidInput.
+    bool correspondence = false;
 };
 
 /// Everything compare_meshes measures. Relative changes are (candidate − reference) / |reference|.
@@ -86,13 +128,15 @@ struct MeshComparison {
     bool manifold_reference = false, manifold_candidate = false;  ///< no non-manifold edges or vertices
 
     CreasePreservation crease;           ///< see crease_preservation
+    std::optional<CorrespondenceErrors> correspondence;  ///< with CompareOptions::correspondence
     std::vector<std::string> warnings;   ///< e.g. "candidate is open: volume change is only indicative"
 };
 
 /// Compares candidate with reference: surface distances (metrics/surface_distance.h, absolute and
 /// relative to the reference's bbox diagonal), area and volume change, components, closed/manifold
-/// (core/mesh_report.h) and crease preservation.
-/// \throw InvalidInput if either mesh has no triangles, bad indices or non-finite positions.
+/// (core/mesh_report.h) and crease preservation; with opt.correspondence also correspondence_errors.
+/// \throw InvalidInput if either mesh has no triangles, bad indices or non-finite positions, or, with
+///        opt.correspondence, if the two do not share their connectivity.
 /// Cost: that of surface_distance plus crease_preservation plus two mesh_report calls.
 MeshComparison compare_meshes(const Mesh& candidate, const Mesh& reference, const CompareOptions& opt = {});
 
