@@ -21,6 +21,18 @@ Json row_json(const CompareReportRow& r) {
     j.set("components", c.components_candidate).set("closed", c.closed_candidate).set("manifold", c.manifold_candidate);
     if (r.self_intersections >= 0) j.set("self_intersecting_pairs", r.self_intersections);
     j.set("crease_preservation", c.crease.fraction).set("crease_mean_angle_deg", c.crease.mean_angle_deg);
+    if (c.correspondence) {
+        const CorrespondenceErrors& e = *c.correspondence;
+        Json k = Json::object();
+        k.set("faces", e.faces).set("degenerate_faces", e.degenerate_faces);
+        k.set("mean_face_angle_deg", e.mean_face_angle_deg).set("max_face_angle_deg", e.max_face_angle_deg);
+        k.set("vertices", e.vertices);
+        k.set("mean_vertex_distance", e.mean_vertex_distance)
+            .set("mean_vertex_distance_relative", e.mean_vertex_distance_relative);
+        k.set("max_vertex_distance", e.max_vertex_distance)
+            .set("max_vertex_distance_relative", e.max_vertex_distance_relative);
+        j.set("correspondence", k);
+    }
     j.set("seconds", r.seconds).set("warnings", Json::array(c.warnings));
     return j;
 }
@@ -42,6 +54,7 @@ Json to_json(const CompareReport& a) {
     Json proto = Json::object();
     proto.set("samples_per_mesh", a.options.sampling.samples).set("seed", static_cast<unsigned long long>(a.options.sampling.seed));
     proto.set("crease_angle_deg", a.options.crease.angle_deg).set("crease_radius_relative", a.options.crease.radius_relative);
+    if (a.options.correspondence) proto.set("correspondence", true);  // absent: the output without the flag is unchanged
     j.set("protocol", proto);
     Json arr = Json::array();
     for (const CompareReportRow& r : rows) arr.push(row_json(r));

@@ -9,7 +9,9 @@ namespace normalflow {
 
 /// compare.json and `normalflow compare --json`: {"command":"compare","reference":...,
 /// "reference_stats":{...} (when there is a candidate),"protocol":{...},"candidates":[{...},...]}.
-/// "self_intersecting_pairs" is present only when measured. Keys in a fixed order.
+/// "self_intersecting_pairs" is present only when measured, a candidate's "correspondence":{...}
+/// (CorrespondenceErrors) and the protocol's "correspondence":true only with CompareOptions::correspondence.
+/// Keys in a fixed order.
 Json to_json(const CompareReport& r);
 
 }  // namespace normalflow

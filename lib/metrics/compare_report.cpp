@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace normalflow {
 
@@ -21,6 +22,18 @@ std::string yes_no(bool b) { return b ? "yes" : "no"; }
 
 std::string si(long long n) { return n < 0 ? "-" : std::to_string(n); }
 
+/// The correspondence columns of the tables (with CompareOptions::correspondence): face-by-face normal
+/// angle, mean vertex distance (absolute, / diagonal) and max; "-" where a row has none.
+const char* kCorrespondenceHeader = " face-by-face angle ° | vertex dist. | vertex dist. / diag | max vertex dist. |";
+const char* kCorrespondenceRule = "---|---|---|---|";
+
+std::vector<std::string> correspondence_cells(const MeshComparison& c) {
+    if (!c.correspondence) return {"-", "-", "-", "-"};
+    const CorrespondenceErrors& e = *c.correspondence;
+    return {fmt("%.2f", e.mean_face_angle_deg), fmt("%.4g", e.mean_vertex_distance),
+            fmt("%.3e", e.mean_vertex_distance_relative), fmt("%.4g", e.max_vertex_distance)};
+}
+
 std::string csv_quote(const std::string& s) {
     std::string o = "\"";
     for (char ch : s) {
@@ -30,11 +43,15 @@ std::string csv_quote(const std::string& s) {
     return o + "\"";
 }
 
-std::string report_csv(const std::vector<Row>& rows) {
+std::string report_csv(const std::vector<Row>& rows, bool correspondence) {
     std::string s =
         "candidate,hausdorff,hausdorff_relative,mean_distance,mean_relative,rms_distance,rms_relative,"
         "mean_normal_angle_deg,area_change,volume_change,components,closed,manifold,self_intersecting_pairs,"
-        "crease_preservation,crease_mean_angle_deg,seconds\n";
+        "crease_preservation,crease_mean_angle_deg,";
+    if (correspondence)
+        s += "face_normal_angle_deg,face_normal_angle_max_deg,degenerate_faces,mean_vertex_distance,"
+             "mean_vertex_distance_relative,max_vertex_distance,max_vertex_distance_relative,";
+    s += "seconds\n";
     for (const Row& r : rows) {
         const MeshComparison& c = r.comparison;
         s += csv_quote(r.name);
@@ -47,21 +64,37 @@ std::string report_csv(const std::vector<Row>& rows) {
         for (const std::string& field :
              {std::to_string(c.components_candidate), yes_no(c.closed_candidate), yes_no(c.manifold_candidate),
               r.self_intersections < 0 ? std::string() : std::to_string(r.self_intersections),
-              fmt("%.6g", c.crease.fraction), fmt("%.6g", c.crease.mean_angle_deg), fmt("%.4g", r.seconds)}) {
+              fmt("%.6g", c.crease.fraction), fmt("%.6g", c.crease.mean_angle_deg)}) {
             s += ',';
             s += field;
         }
+        if (correspondence) {  // empty fields for a row without them
+            const CorrespondenceErrors* e = c.correspondence ? &*c.correspondence : nullptr;
+            for (const std::string& field :
+                 {e ? fmt("%.9g", e->mean_face_angle_deg) : "", e ? fmt("%.9g", e->max_face_angle_deg) : "",
+                  e ? std::to_string(e->degenerate_faces) : "", e ? fmt("%.9g", e->mean_vertex_distance) : "",
+                  e ? fmt("%.9g", e->mean_vertex_distance_relative) : "", e ? fmt("%.9g", e->max_vertex_distance) : "",
+                  e ? fmt("%.9g", e->max_vertex_distance_relative) : ""}) {
+                s += ',';
+                s += field;
+            }
+        }
+        s += ',';
+        s += fmt("%.4g", r.seconds);
         s += '\n';
     }
     return s;
 }
 
 /// One Markdown table (also what is printed to the terminal).
-std::string report_table(const std::vector<Row>& rows) {
+std::string report_table(const std::vector<Row>& rows, bool correspondence) {
     std::string s =
         "| candidate | Hausdorff | Hausdorff / diag | mean | RMS | normal angle ° | area Δ | volume Δ | components | "
-        "closed | manifold | self-int. pairs | crease kept |\n"
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "closed | manifold | self-int. pairs | crease kept |";
+    if (correspondence) s += kCorrespondenceHeader;
+    s += "\n|---|---|---|---|---|---|---|---|---|---|---|---|---|";
+    if (correspondence) s += kCorrespondenceRule;
+    s += '\n';
     for (const Row& r : rows) {
         const MeshComparison& c = r.comparison;
         s += "| " + r.name + " | " + fmt("%.4g", c.distance.hausdorff) + " | " + fmt("%.3e", c.hausdorff_relative) +
@@ -69,7 +102,10 @@ std::string report_table(const std::vector<Row>& rows) {
              fmt("%.2f", c.distance.mean_normal_angle_deg) + " | " + fmt("%+.3f%%", 100 * c.area_change) + " | " +
              fmt("%+.3f%%", 100 * c.volume_change) + " | " + std::to_string(c.components_candidate) + " | " +
              yes_no(c.closed_candidate) + " | " + yes_no(c.manifold_candidate) + " | " + si(r.self_intersections) +
-             " | " + fmt("%.1f%%", 100 * c.crease.fraction) + " |\n";
+             " | " + fmt("%.1f%%", 100 * c.crease.fraction) + " |";
+        if (correspondence)
+            for (const std::string& cell : correspondence_cells(c)) s += " " + cell + " |";
+        s += '\n';
     }
     return s;
 }
@@ -84,7 +120,7 @@ std::string report_markdown(const CompareReport& a) {
              " components, " + std::to_string(c.crease.feature_edges) + " feature edges of total length " +
              fmt("%.6g", c.crease.feature_length) + ")";
     }
-    s += "\n\n" + report_table(rows);
+    s += "\n\n" + report_table(rows, a.options.correspondence);
     s += "\nProtocol: distances in world units from " + std::to_string(a.options.sampling.samples) +
          " area-uniform samples on each surface (seed " + std::to_string(a.options.sampling.seed) +
          "), exact closest points; Hausdorff is two-sided; mean and RMS pool both directions; the normal "
@@ -93,7 +129,14 @@ std::string report_markdown(const CompareReport& a) {
          "feature-edge length (dihedral angle above " + fmt("%.3g", a.options.crease.angle_deg) +
          "°) where the candidate's area-weighted mean normals on the two sides, within " +
          fmt("%.3g", 100 * a.options.crease.radius_relative) +
-         " % of the reference diagonal, still differ by more than that angle.\n";
+         " % of the reference diagonal, still differ by more than that angle.";
+    if (a.options.correspondence)
+        s += " Correspondence (the candidate keeps the reference's vertices and triangles in order): the "
+             "face-by-face angle is the unweighted mean over triangles of the angle between triangle i's unit "
+             "normal on the candidate and on the reference (triangles of zero area in either mesh are left out "
+             "and counted in the warnings); vertex distances are |p_i − q_i| over all vertices, their mean "
+             "(absolute and / reference diagonal) and their max.";
+    s += "\n";
     for (const Row& r : rows)
         for (const auto& w : r.comparison.warnings) s += "\n- " + r.name + ": " + w;
     s += "\n";
@@ -134,7 +177,11 @@ std::string report_html(const CompareReport& a, const CompareReportPictures& pic
         "<h1>normalflow compare</h1>\n<p>Reference: <code>" + html_escape(a.reference) + "</code></p>\n";
     s += "<table id=\"metrics\">\n<tr><th>candidate</th><th>Hausdorff</th><th>Hausdorff / diag</th><th>mean</th>"
          "<th>RMS</th><th>normal angle &deg;</th><th>area &Delta;</th><th>volume &Delta;</th><th>components</th>"
-         "<th>closed</th><th>manifold</th><th>self-int. pairs</th><th>crease kept</th></tr>\n";
+         "<th>closed</th><th>manifold</th><th>self-int. pairs</th><th>crease kept</th>";
+    if (a.options.correspondence)
+        s += "<th>face-by-face angle &deg;</th><th>vertex dist.</th><th>vertex dist. / diag</th>"
+             "<th>max vertex dist.</th>";
+    s += "</tr>\n";
     for (const Row& r : rows) {
         const MeshComparison& c = r.comparison;
         s += "<tr><td>" + html_escape(r.name) + "</td>";
@@ -145,6 +192,8 @@ std::string report_html(const CompareReport& a, const CompareReportPictures& pic
               std::to_string(c.components_candidate), yes_no(c.closed_candidate), yes_no(c.manifold_candidate),
               si(r.self_intersections), fmt("%.1f%%", 100 * c.crease.fraction)})
             s += "<td>" + f + "</td>";
+        if (a.options.correspondence)
+            for (const std::string& f : correspondence_cells(c)) s += "<td>" + f + "</td>";
         s += "</tr>\n";
     }
     s += "</table>\n<p>Also as <a href=\"compare.md\">Markdown</a>, <a href=\"compare.csv\">CSV</a> and "
@@ -193,11 +242,11 @@ std::string report_html(const CompareReport& a, const CompareReportPictures& pic
 
 }  // namespace
 
-std::string compare_table_markdown(const CompareReport& r) { return report_table(r.rows); }
+std::string compare_table_markdown(const CompareReport& r) { return report_table(r.rows, r.options.correspondence); }
 
 std::string to_markdown(const CompareReport& r) { return report_markdown(r); }
 
-std::string to_csv(const CompareReport& r) { return report_csv(r.rows); }
+std::string to_csv(const CompareReport& r) { return report_csv(r.rows, r.options.correspondence); }
 
 std::string to_html(const CompareReport& r, const CompareReportPictures& pictures) { return report_html(r, pictures); }
 

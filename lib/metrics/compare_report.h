@@ -41,7 +41,9 @@ struct CompareReportPictures {
 };
 
 /// The metric table in Markdown, header and separator lines included, one line per candidate
-/// (what `normalflow compare` prints to the terminal).
+/// (what `normalflow compare` prints to the terminal). With options.correspondence, four more columns:
+/// face-by-face angle, mean vertex distance (absolute and / diagonal), max vertex distance ("-" where a
+/// row has no MeshComparison::correspondence); the same in the CSV and HTML tables.
 std::string compare_table_markdown(const CompareReport& r);
 
 /// compare.md: a title, the reference with its statistics (when there is a candidate), the table,
@@ -49,7 +51,9 @@ std::string compare_table_markdown(const CompareReport& r);
 std::string to_markdown(const CompareReport& r);
 
 /// compare.csv: a header line, then one line per candidate; the candidate name quoted (RFC 4180),
-/// distances with 9 significant digits, self_intersecting_pairs empty when not measured.
+/// distances with 9 significant digits, self_intersecting_pairs empty when not measured. With
+/// options.correspondence, before seconds: face_normal_angle_deg, face_normal_angle_max_deg,
+/// degenerate_faces, mean_vertex_distance(_relative), max_vertex_distance(_relative), empty when not measured.
 std::string to_csv(const CompareReport& r);
 
 /// index.html: the metric table, then grids of shaded and distance pictures (rows = meshes,

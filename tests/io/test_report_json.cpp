@@ -34,5 +34,35 @@ TEST(ReportJson, CompareReport) {
     EXPECT_NE(to_json(r).dump().find("\"self_intersecting_pairs\":4,"), std::string::npos);
 }
 
+TEST(ReportJson, CorrespondenceOnlyWhenMeasured) {
+    CompareReport r;
+    r.reference = "ref.ply";
+    CompareReportRow row;
+    row.name = "a.ply";
+    r.rows.push_back(row);
+    const std::string without = to_json(r).dump();
+    EXPECT_EQ(without.find("correspondence"), std::string::npos) << without;
+    r.options.correspondence = true;
+    CorrespondenceErrors e;
+    e.faces = 12;
+    e.degenerate_faces = 2;
+    e.mean_face_angle_deg = 7.5;
+    e.max_face_angle_deg = 45;
+    e.vertices = 8;
+    e.mean_vertex_distance = 0.125;
+    e.mean_vertex_distance_relative = 0.0625;
+    e.max_vertex_distance = 1;
+    e.max_vertex_distance_relative = 0.5;
+    r.rows[0].comparison.correspondence = e;
+    const std::string with = to_json(r).dump();
+    EXPECT_NE(with.find("\"crease_radius_relative\":0.01,\"correspondence\":true}"), std::string::npos) << with;
+    EXPECT_NE(with.find("\"correspondence\":{\"faces\":12,\"degenerate_faces\":2,\"mean_face_angle_deg\":7.5,"
+                        "\"max_face_angle_deg\":45,\"vertices\":8,\"mean_vertex_distance\":0.125,"
+                        "\"mean_vertex_distance_relative\":0.0625,\"max_vertex_distance\":1,"
+                        "\"max_vertex_distance_relative\":0.5},\"seconds\""),
+              std::string::npos)
+        << with;
+}
+
 }  // namespace
 }  // namespace normalflow

@@ -93,6 +93,54 @@ TEST(CompareReport, CsvHeaderAndRows) {
               "\"b \"\"<x>\"\".obj\",0.5,0.05,0.1,0.01,0.2,0.02,3.25,0.01,-0.02,1,no,yes,7,0.875,40,1.5\n");
 }
 
+// With --correspondence: four more columns, "-" (empty in the CSV) for a row without them.
+CompareReport correspondence_report() {
+    CompareReport r = small_report();
+    r.options.correspondence = true;
+    CorrespondenceErrors e;
+    e.faces = 12;
+    e.degenerate_faces = 2;
+    e.mean_face_angle_deg = 7.5;
+    e.max_face_angle_deg = 45;
+    e.vertices = 8;
+    e.mean_vertex_distance = 0.125;
+    e.mean_vertex_distance_relative = 0.0125;
+    e.max_vertex_distance = 1;
+    e.max_vertex_distance_relative = 0.1;
+    r.rows[0].comparison.correspondence = e;
+    return r;
+}
+
+TEST(CompareReport, CorrespondenceColumns) {
+    const CompareReport r = correspondence_report();
+    EXPECT_EQ(compare_table_markdown(r),
+              "| candidate | Hausdorff | Hausdorff / diag | mean | RMS | normal angle ° | area Δ | volume Δ | components | "
+              "closed | manifold | self-int. pairs | crease kept | face-by-face angle ° | vertex dist. | "
+              "vertex dist. / diag | max vertex dist. |\n"
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+              "| a.ply | 0.5 | 5.000e-02 | 0.1 | 0.2 | 3.25 | +1.000% | -2.000% | 1 | yes | yes | - | 87.5% | 7.50 | "
+              "0.125 | 1.250e-02 | 1 |\n"
+              "| b \"<x>\".obj | 0.5 | 5.000e-02 | 0.1 | 0.2 | 3.25 | +1.000% | -2.000% | 1 | no | yes | 7 | 87.5% | - | - "
+              "| - | - |\n");
+    EXPECT_EQ(to_csv(r),
+              "candidate,hausdorff,hausdorff_relative,mean_distance,mean_relative,rms_distance,rms_relative,"
+              "mean_normal_angle_deg,area_change,volume_change,components,closed,manifold,self_intersecting_pairs,"
+              "crease_preservation,crease_mean_angle_deg,face_normal_angle_deg,face_normal_angle_max_deg,"
+              "degenerate_faces,mean_vertex_distance,mean_vertex_distance_relative,max_vertex_distance,"
+              "max_vertex_distance_relative,seconds\n"
+              "\"a.ply\",0.5,0.05,0.1,0.01,0.2,0.02,3.25,0.01,-0.02,1,yes,yes,,0.875,40,7.5,45,2,0.125,0.0125,1,0.1,1.5\n"
+              "\"b \"\"<x>\"\".obj\",0.5,0.05,0.1,0.01,0.2,0.02,3.25,0.01,-0.02,1,no,yes,7,0.875,40,,,,,,,,1.5\n");
+    const std::string md = to_markdown(r);
+    EXPECT_NE(md.find("the face-by-face angle is the unweighted mean over triangles"), std::string::npos) << md;
+    EXPECT_EQ(to_markdown(small_report()).find("face-by-face"), std::string::npos);
+    CompareReportPictures p;
+    p.meshes.resize(3);
+    const std::string h = to_html(r, p);
+    EXPECT_NE(h.find("<th>crease kept</th><th>face-by-face angle &deg;</th>"), std::string::npos) << h;
+    EXPECT_NE(h.find("<td>87.5%</td><td>7.50</td><td>0.125</td><td>1.250e-02</td><td>1</td></tr>"), std::string::npos) << h;
+    EXPECT_EQ(to_html(small_report(), p).find("face-by-face"), std::string::npos);
+}
+
 TEST(CompareReport, HtmlHasTheTableAndThePictures) {
     CompareReportPictures p;
     p.size = 64;
