@@ -1,6 +1,8 @@
-// normalflow compare REFERENCE CANDIDATE... [--report DIR] [--json]: metrics without vertex
-// correspondence (lib/metrics/compare.h), a table on stdout (lib/metrics/compare_report.h) and
-// compare.{md,csv,json}, pictures and index.html in DIR (io/render/compare_report.h).
+// normalflow compare REFERENCE CANDIDATE... [--report DIR] [--json] [--correspondence]: metrics without
+// vertex correspondence (lib/metrics/compare.h), a table on stdout (lib/metrics/compare_report.h) and
+// compare.{md,csv,json}, pictures and index.html in DIR (io/render/compare_report.h). With
+// --correspondence, for candidates that kept the reference's connectivity, also the face-by-face normal
+// angle and the vertex-by-vertex distance (correspondence_errors).
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -47,6 +49,12 @@ int run_compare(const CompareArgs& a) {
         CompareReportRow r;
         r.name = a.candidates[i];
         Mesh cand = read_mesh(a.candidates[i]);
+        if (a.options.correspondence) {  // refused here, with the file names, before anything is measured
+            const std::string mismatch = correspondence_mismatch(cand, reference);
+            if (!mismatch.empty())
+                throw InvalidInput("--correspondence: candidate " + a.candidates[i] + " vs reference " +
+                                   a.reference + ": " + mismatch);
+        }
         r.comparison = compare_meshes(cand, reference, a.options);
 #ifdef NORMALFLOW_HAS_CGAL
         if (a.self_intersections) r.self_intersections = static_cast<long long>(count_self_intersections(cand));
@@ -95,6 +103,10 @@ void add_compare_command(CLI::App& app) {
     cmd->add_option("--crease-radius", args->options.crease.radius_relative,
                     "crease neighbourhood radius, fraction of the reference bbox diagonal")
         ->check(CLI::PositiveNumber)->capture_default_str();
+    cmd->add_flag("--correspondence", args->options.correspondence,
+                  "also face-by-face normal angle and vertex-by-vertex distance; the candidates must have the "
+                  "reference's vertex count and triangles, in order (e.g. a mesh-side smoothing of the noisy "
+                  "mesh vs its ground truth)");
     cmd->add_flag("!--no-self-intersections", args->self_intersections, "skip counting self-intersections (CGAL)");
     cmd->add_flag("!--no-pictures", args->pictures, "with --report: skip the PNG pictures and index.html");
     cmd->add_option("--picture-size", args->picture_size, "with --report: picture width and height, pixels")

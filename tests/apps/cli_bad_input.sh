@@ -30,6 +30,10 @@ expect_error "$tmp/cube.xyz" "$nf" info "$tmp/cube.xyz"
 expect_error "/nonexistent/dir/out.ply" "$nf" smooth "$root/examples/noisy_part.ply" /nonexistent/dir/out.ply \
   --resolution 32 --iterations 1
 [ ! -e /nonexistent/dir ] || fail "/nonexistent/dir was created"
+# compare --correspondence: a candidate with other connectivity is refused in one line naming it
+expect_error "$root/examples/noisy_part.ply" "$nf" compare "$fixtures/cube_ascii.ply" "$root/examples/noisy_part.ply" \
+  --correspondence --no-self-intersections
+grep -qF "candidate has" "$tmp/err.txt" || fail "compare --correspondence: no count in $(cat "$tmp/err.txt")"
 
 # an existing output file is left byte-identical when the run fails
 printf 'precious contents\n' >"$tmp/keep.ply"
