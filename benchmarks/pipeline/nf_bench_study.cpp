@@ -13,6 +13,10 @@
 // Metrics (compare_meshes, no vertex correspondence): mean / RMS / Hausdorff distance relative to the
 // ground truth's diagonal, mean normal angle (area-uniform samples on the result, its face normal
 // against the ground truth's face normal at the closest point), volume change, crease preservation.
+// Rows whose mesh kept the noisy mesh's vertices and triangles (the noisy input, Taubin, Laplacian, the
+// bilateral normal filter, normalflow keep and default on an open input, published results), which the
+// ground truth shares, also get the correspondence measures of the denoising papers (correspondence_errors):
+// face-by-face normal angle (unweighted mean over faces) and mean vertex distance; "-" on the others.
 // Prints a Markdown table (and writes it with --md, the rows as CSV with --csv after every pair).
 // Then the triangulation experiment: one torus meshed two ways, smoothed by Taubin and by normalflow.
 // Not part of the test suite (minutes to an hour; see benchmarks/README.md).
@@ -135,6 +139,23 @@ Mesh normalflow_smooth(const Mesh& m, int resolution, SmoothMode mode, int threa
     return smooth_mesh(m, o).mesh;
 }
 
+/// The correspondence columns of a row: the face-by-face angle (degrees) and the mean vertex distance
+/// relative to the ground truth's diagonal, printed with f, or `none` when the row's mesh has other
+/// connectivity than the ground truth.
+std::string correspondence_cell(const MeshComparison& c, double CorrespondenceErrors::*field, const char* f,
+                                const char* none) {
+    if (!c.correspondence) return none;
+    char buf[64];
+    std::snprintf(buf, sizeof buf, f, (*c.correspondence).*field);
+    return buf;
+}
+std::string face_angle(const MeshComparison& c, const char* f, const char* none) {
+    return correspondence_cell(c, &CorrespondenceErrors::mean_face_angle_deg, f, none);
+}
+std::string vertex_distance(const MeshComparison& c, const char* f, const char* none) {
+    return correspondence_cell(c, &CorrespondenceErrors::mean_vertex_distance_relative, f, none);
+}
+
 double now_ms() {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -177,7 +198,8 @@ int main(int argc, char** argv) {
 
     std::vector<Row> rows;
     std::string csv = "set,noisy,method,parameters,ms,mean_relative,rms_relative,hausdorff_relative,"
-                      "mean_normal_angle_deg,volume_change,crease_preservation\n";
+                      "mean_normal_angle_deg,volume_change,crease_preservation,face_normal_angle_deg,"
+                      "mean_vertex_distance_relative\n";
     auto save_csv = [&] {
         if (csv_path.empty()) return;
         AtomicFile f(csv_path, "nf_bench_study");
@@ -194,16 +216,20 @@ int main(int argc, char** argv) {
             const Mesh gt = read_mesh(p.truth.string());
             const Mesh noisy = read_mesh(p.noisy.string());
             auto add = [&](const std::string& method, const std::string& params, double ms, const Mesh& m) {
-                rows.push_back({p.set, p.noisy_name, method, params, ms, compare_meshes(m, gt, co)});
+                CompareOptions o = co;
+                o.correspondence = correspondence_mismatch(m, gt).empty();  // connectivity kept
+                rows.push_back({p.set, p.noisy_name, method, params, ms, compare_meshes(m, gt, o)});
                 const Row& r = rows.back();
-                char buf[512];
-                std::snprintf(buf, sizeof buf, "%s,%s,\"%s\",\"%s\",%.3f,%.6e,%.6e,%.6e,%.4f,%.6f,%.4f\n",
+                char buf[640];
+                std::snprintf(buf, sizeof buf, "%s,%s,\"%s\",\"%s\",%.3f,%.6e,%.6e,%.6e,%.4f,%.6f,%.4f,%s,%s\n",
                               r.set.c_str(), r.noisy.c_str(), r.method.c_str(), r.params.c_str(), r.ms,
                               r.c.mean_relative, r.c.rms_relative, r.c.hausdorff_relative,
-                              r.c.distance.mean_normal_angle_deg, r.c.volume_change, r.c.crease.fraction);
+                              r.c.distance.mean_normal_angle_deg, r.c.volume_change, r.c.crease.fraction,
+                              face_angle(r.c, "%.4f", "").c_str(), vertex_distance(r.c, "%.6e", "").c_str());
                 csv += buf;
-                std::fprintf(stderr, "%s %s %s: mean/diag %.3e, normal %.2f deg, %.1f ms\n", key.c_str(),
-                             method.c_str(), params.c_str(), r.c.mean_relative, r.c.distance.mean_normal_angle_deg, ms);
+                std::fprintf(stderr, "%s %s %s: mean/diag %.3e, normal %.2f deg, face-by-face %s deg, %.1f ms\n",
+                             key.c_str(), method.c_str(), params.c_str(), r.c.mean_relative,
+                             r.c.distance.mean_normal_angle_deg, face_angle(r.c, "%.2f", "-").c_str(), ms);
             };
             add("noisy input", "", 0, noisy);
 
@@ -284,13 +310,16 @@ int main(int argc, char** argv) {
 
     std::string md =
         "| set | noisy mesh | method | parameters | ms | mean dist / diag | RMS / diag | Hausdorff / diag | "
-        "normal angle ° | volume Δ | crease kept |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+        "normal angle ° | volume Δ | crease kept | face-by-face angle ° | vertex dist. / diag |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
-        char buf[512];
-        std::snprintf(buf, sizeof buf, "| %s | %s | %s | %s | %.0f | %.3e | %.3e | %.3e | %.2f | %+.2f%% | %.1f%% |\n",
+        char buf[640];
+        std::snprintf(buf, sizeof buf,
+                      "| %s | %s | %s | %s | %.0f | %.3e | %.3e | %.3e | %.2f | %+.2f%% | %.1f%% | %s | %s |\n",
                       r.set.c_str(), r.noisy.c_str(), r.method.c_str(), r.params.c_str(), r.ms, r.c.mean_relative,
                       r.c.rms_relative, r.c.hausdorff_relative, r.c.distance.mean_normal_angle_deg,
-                      100 * r.c.volume_change, 100 * r.c.crease.fraction);
+                      100 * r.c.volume_change, 100 * r.c.crease.fraction, face_angle(r.c, "%.2f", "-").c_str(),
+                      vertex_distance(r.c, "%.3e", "-").c_str());
         md += buf;
     }
     std::printf("%s", md.c_str());
