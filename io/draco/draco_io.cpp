@@ -24,6 +24,7 @@
 
 #include "core/errors.h"
 #include "io/util/atomic_file.h"
+#include "io/formats/gltf.h"
 #include "io/draco/gltf_check.h"
 #include "io/util/isolate.h"
 
@@ -85,22 +86,87 @@ void check_glb(const std::vector<char>& d, const std::string& who) {
     if (chunk == 0) throw InvalidInput(who + ": GLB file has no JSON chunk");
 }
 
-/// Copies POSITION and faces of a decoded Draco mesh; validates.
-Mesh to_mesh(const draco::Mesh& dm, const std::string& who) {
+/// Where a decoded Draco mesh came from: glTF stores colours linear, .drc files (draco_encoder from
+/// PLY/OBJ) as the 8-bit sRGB values of the source.
+enum class ColorSpace { Srgb, Linear };
+
+/// Reads one colour of a COLOR attribute as sRGB bytes (alpha 255 when it has 3 components).
+Rgba8 read_color(const draco::PointAttribute& a, draco::AttributeValueIndex i, ColorSpace space) {
+    const int n = std::min<int>(a.num_components(), 4);
+    Rgba8 c{255, 255, 255, 255};
+    float f[4] = {1, 1, 1, 1};
+    if (a.data_type() == draco::DT_UINT8) {
+        std::uint8_t b[4] = {255, 255, 255, 255};
+        a.ConvertValue<std::uint8_t>(i, std::int8_t(n), b);
+        for (int k = 0; k < 4; ++k) f[k] = float(b[k]) / 255.0f;
+    } else if (a.data_type() == draco::DT_UINT16) {
+        std::uint16_t b[4] = {65535, 65535, 65535, 65535};
+        a.ConvertValue<std::uint16_t>(i, std::int8_t(n), b);
+        for (int k = 0; k < 4; ++k) f[k] = float(b[k]) / 65535.0f;
+    } else {
+        a.ConvertValue<float>(i, std::int8_t(n), f);
+    }
+    for (int k = 0; k < 4; ++k) {
+        float x = std::isfinite(f[k]) ? std::clamp(f[k], 0.0f, 1.0f) : 0.0f;
+        if (space == ColorSpace::Linear && k < 3) x = linear_to_srgb(x);
+        c[std::size_t(k)] = std::uint8_t(std::lround(x * 255.0f));
+    }
+    return c;
+}
+
+/// Copies POSITION, faces and NORMAL, COLOR and TEX_COORD (the first of each) of a decoded Draco mesh;
+/// validates. Without attributes, points with equal positions are one vertex (Draco's position
+/// values); with attributes, every Draco point is a vertex (a seam keeps its two sides).
+/// flip_v: glTF's texture v points down, normalflow's up.
+Mesh to_mesh(const draco::Mesh& dm, const std::string& who, ColorSpace colors, bool flip_v) {
     const draco::PointAttribute* pa = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
     if (!pa) throw InvalidInput(who + ": no POSITION attribute");
     if (pa->num_components() < 3) throw InvalidInput(who + ": POSITION has " + std::to_string(pa->num_components()) +
                                                      " components, expected 3");
     if (dm.num_faces() == 0) throw InvalidInput(who + ": no triangles (point cloud or non-triangle primitives)");
+    const draco::PointAttribute* na = dm.GetNamedAttribute(draco::GeometryAttribute::NORMAL);
+    const draco::PointAttribute* ca = dm.GetNamedAttribute(draco::GeometryAttribute::COLOR);
+    const draco::PointAttribute* ta = dm.GetNamedAttribute(draco::GeometryAttribute::TEX_COORD);
+    if (na && na->num_components() < 3) na = nullptr;
+    if (ca && ca->num_components() < 3) ca = nullptr;
+    if (ta && ta->num_components() < 2) ta = nullptr;
+    const bool per_point = na || ca || ta;
     Mesh m;
-    const std::size_t nv = pa->size();
+    const std::size_t nv = per_point ? dm.num_points() : pa->size();
+    // vertex i's value index in attribute a
+    const auto value = [&](const draco::PointAttribute* a, std::size_t i) {
+        return per_point ? a->mapped_index(draco::PointIndex(std::uint32_t(i)))
+                         : draco::AttributeValueIndex(std::uint32_t(i));
+    };
     m.positions.resize(nv);
     for (std::size_t i = 0; i < nv; ++i) {
         float p[3];
-        if (!pa->ConvertValue<float>(draco::AttributeValueIndex(std::uint32_t(i)), 3, p))
+        if (!pa->ConvertValue<float>(value(pa, i), 3, p))
             throw InvalidInput(who + ": cannot convert POSITION value " + std::to_string(i));
         m.positions[i] = {p[0], p[1], p[2]};
         if (!is_finite(m.positions[i])) throw InvalidInput(who + ": point " + std::to_string(i) + " is not finite");
+    }
+    if (na) {
+        m.normals.resize(nv);
+        for (std::size_t i = 0; i < nv; ++i) {
+            float n[3] = {0, 0, 0};
+            na->ConvertValue<float>(value(na, i), 3, n);
+            m.normals[i] = is_finite(Vec3f{n[0], n[1], n[2]}) ? Vec3f{n[0], n[1], n[2]} : Vec3f{};
+        }
+    }
+    if (ca) {
+        m.colors.resize(nv);
+        for (std::size_t i = 0; i < nv; ++i) m.colors[i] = read_color(*ca, value(ca, i), colors);
+    }
+    if (ta) {
+        m.texcoords.resize(nv);
+        for (std::size_t i = 0; i < nv; ++i) {
+            float t[2] = {0, 0};
+            ta->ConvertValue<float>(value(ta, i), 2, t);
+            for (float& x : t)
+                if (!std::isfinite(x)) x = 0;
+            m.texcoords[i] = {t[0], flip_v ? 1.0f - t[1] : t[1]};
+        }
     }
     m.triangles.resize(dm.num_faces());
     for (std::uint32_t f = 0; f < dm.num_faces(); ++f) {
@@ -109,7 +175,7 @@ Mesh to_mesh(const draco::Mesh& dm, const std::string& who) {
             if (face[c].value() >= dm.num_points())
                 throw InvalidInput(who + ": triangle " + std::to_string(f) + " references point " +
                                    std::to_string(face[c].value()) + " of " + std::to_string(dm.num_points()));
-            const std::uint32_t v = pa->mapped_index(face[c]).value();
+            const std::uint32_t v = per_point ? face[c].value() : pa->mapped_index(face[c]).value();
             if (v >= nv) throw InvalidInput(who + ": triangle " + std::to_string(f) + " has an invalid position index");
             m.triangles[f][std::size_t(c)] = v;
         }
@@ -122,13 +188,17 @@ void check_options(const DracoOptions& opt, const std::string& who) {
         throw InvalidInput(who + ": position_bits " + std::to_string(opt.position_bits) + " out of range [1, 30]");
     if (opt.normal_bits < 1 || opt.normal_bits > 30)
         throw InvalidInput(who + ": normal_bits " + std::to_string(opt.normal_bits) + " out of range [1, 30]");
+    if (opt.texcoord_bits < 1 || opt.texcoord_bits > 30)
+        throw InvalidInput(who + ": texcoord_bits " + std::to_string(opt.texcoord_bits) + " out of range [1, 30]");
     if (opt.compression_level < 0 || opt.compression_level > 10)
         throw InvalidInput(who + ": compression_level " + std::to_string(opt.compression_level) + " out of range [0, 10]");
 }
 
-/// Builds a Draco mesh from m (validated), with equal positions merged.
-std::unique_ptr<draco::Mesh> to_draco(const Mesh& m, const std::string& who) {
+/// Builds a Draco mesh from m (validated) with its attributes, with equal points merged.
+/// For glTF (linear_colors, flip_v) colours are stored linear and texture v flipped.
+std::unique_ptr<draco::Mesh> to_draco(const Mesh& m, const std::string& who, bool linear_colors, bool flip_v) {
     const std::size_t nv = m.positions.size(), nf = m.triangles.size();
+    check_mesh(m, who);
     if (nv == 0 || nf == 0)
         throw InvalidInput(who + ": empty mesh (" + std::to_string(nv) + " points, " + std::to_string(nf) + " triangles)");
     if (nv > std::size_t(std::numeric_limits<std::int32_t>::max()) || nf > std::size_t(std::numeric_limits<std::int32_t>::max()))
@@ -153,6 +223,40 @@ std::unique_ptr<draco::Mesh> to_draco(const Mesh& m, const std::string& who) {
                                    ", expected < " + std::to_string(nv));
         dm->AddFace({draco::PointIndex(t[0]), draco::PointIndex(t[1]), draco::PointIndex(t[2])});
     }
+    // Optional attributes, one value per point (deduplicated below like the positions).
+    const auto add = [&](draco::GeometryAttribute::Type type, int comps, draco::DataType dt, bool normalized,
+                         std::size_t bytes, auto&& fill) {
+        draco::GeometryAttribute g;
+        g.Init(type, nullptr, std::int8_t(comps), dt, normalized, std::int64_t(bytes), 0);
+        draco::PointAttribute* a = dm->attribute(dm->AddAttribute(g, true, std::uint32_t(nv)));
+        for (std::size_t i = 0; i < nv; ++i) fill(a, i);
+    };
+    if (m.has_normals())
+        add(draco::GeometryAttribute::NORMAL, 3, draco::DT_FLOAT32, false, 12,
+            [&](draco::PointAttribute* a, std::size_t i) {
+                Vec3f n = m.normals[i];
+                const float len = std::sqrt(dot(n, n));
+                n = len > 0 && std::isfinite(len) ? n / len : Vec3f{0, 0, 1};
+                const float v[3] = {n.x, n.y, n.z};
+                a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), v);
+            });
+    if (m.has_colors())
+        add(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true, 4, [&](draco::PointAttribute* a, std::size_t i) {
+            Rgba8 c = m.colors[i];
+            if (linear_colors)
+                for (std::size_t k = 0; k < 3; ++k)
+                    c[k] = std::uint8_t(std::lround(255.0f * srgb_to_linear(float(c[k]) / 255.0f)));
+            a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), c.data());
+        });
+    if (m.has_texcoords())
+        add(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, false, 8,
+            [&](draco::PointAttribute* a, std::size_t i) {
+                const TexCoord t = m.texcoords[i];
+                const float v[2] = {t[0], flip_v ? 1.0f - t[1] : t[1]};
+                if (!std::isfinite(v[0]) || !std::isfinite(v[1]))
+                    throw InvalidInput(who + ": texture coordinate " + std::to_string(i) + " is not finite");
+                a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), v);
+            });
     dm->DeduplicateAttributeValues();
     dm->DeduplicatePointIds();
     return dm;
@@ -163,6 +267,7 @@ draco::EncoderBuffer encode(const draco::Mesh& dm, const DracoOptions& opt, cons
     draco::Encoder enc;
     enc.SetAttributeQuantization(draco::GeometryAttribute::POSITION, opt.position_bits);
     enc.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, opt.normal_bits);
+    enc.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, opt.texcoord_bits);
     const int speed = 10 - opt.compression_level;
     enc.SetSpeedOptions(speed, speed);
     enc.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
@@ -223,26 +328,65 @@ std::string draco_glb_with_fallback(const draco::Mesh& dm, const DracoOptions& o
             append_u32(bin, std::bit_cast<std::uint32_t>(xyz[a]));
         }
     }
+    const std::size_t pos_len = bin.size() - pos_off;
+    std::string attributes = R"("POSITION":0)", draco_ids = R"("POSITION":)" + std::to_string(pa->unique_id());
+    std::string accessors = R"({"bufferView":1,"componentType":5126,"count":)" + std::to_string(np) +
+                            R"(,"type":"VEC3","min":[)" + float_text(lo[0]) + "," + float_text(lo[1]) + "," +
+                            float_text(lo[2]) + "],\"max\":[" + float_text(hi[0]) + "," + float_text(hi[1]) + "," +
+                            float_text(hi[2]) + "]}";
+    std::string views = R"({"buffer":0,"byteOffset":0,"byteLength":)" + std::to_string(enc.size()) + "}," +
+                        R"({"buffer":0,"byteOffset":)" + std::to_string(pos_off) + R"(,"byteLength":)" +
+                        std::to_string(pos_len) + R"(,"target":34962})";
+    int next = 1;  // accessor index; its buffer view is next + 1
+    // The optional attributes, decoded as the Draco decoder yields them: NORMAL and TEXCOORD_0 as float,
+    // COLOR_0 as normalized unsigned bytes (4 per point, so every part stays 4-byte aligned).
+    struct Extra { draco::GeometryAttribute::Type type; const char* name; const char* vec; int comps; };
+    for (const Extra e : {Extra{draco::GeometryAttribute::NORMAL, "NORMAL", "VEC3", 3},
+                          Extra{draco::GeometryAttribute::COLOR, "COLOR_0", "VEC4", 4},
+                          Extra{draco::GeometryAttribute::TEX_COORD, "TEXCOORD_0", "VEC2", 2}}) {
+        const draco::PointAttribute* a = d->GetNamedAttribute(e.type);
+        if (!a) continue;
+        const std::size_t off = bin.size();
+        const bool bytes = e.type == draco::GeometryAttribute::COLOR;
+        for (std::uint32_t p = 0; p < np; ++p) {
+            const draco::AttributeValueIndex v = a->mapped_index(draco::PointIndex(p));
+            if (bytes) {
+                std::uint8_t c[4] = {255, 255, 255, 255};
+                a->ConvertValue<std::uint8_t>(v, std::int8_t(std::min<int>(a->num_components(), 4)), c);
+                bin.append(reinterpret_cast<const char*>(c), 4);
+            } else {
+                float x[3] = {0, 0, 0};
+                a->ConvertValue<float>(v, std::int8_t(e.comps), x);
+                for (int k = 0; k < e.comps; ++k) append_u32(bin, std::bit_cast<std::uint32_t>(x[k]));
+            }
+        }
+        ++next;
+        attributes += ",\"" + std::string(e.name) + "\":" + std::to_string(next - 1);
+        draco_ids += ",\"" + std::string(e.name) + "\":" + std::to_string(a->unique_id());
+        accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":)" +
+                     (bytes ? R"(5121,"normalized":true)" : "5126") + R"(,"count":)" + std::to_string(np) +
+                     R"(,"type":")" + e.vec + "\"}";
+        views += R"(,{"buffer":0,"byteOffset":)" + std::to_string(off) + R"(,"byteLength":)" +
+                 std::to_string(bin.size() - off) + R"(,"target":34962})";
+    }
     const std::size_t idx_off = bin.size();
     for (std::uint32_t f = 0; f < nf; ++f)
         for (int c = 0; c < 3; ++c) append_u32(bin, d->face(draco::FaceIndex(f))[c].value());
-    const std::size_t pos_len = idx_off - pos_off, idx_len = bin.size() - idx_off;
+    const std::size_t idx_len = bin.size() - idx_off;
+    ++next;
+    accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":5125,"count":)" +
+                 std::to_string(3 * std::uint64_t(nf)) + R"(,"type":"SCALAR"})";
+    views += R"(,{"buffer":0,"byteOffset":)" + std::to_string(idx_off) + R"(,"byteLength":)" + std::to_string(idx_len) +
+             R"(,"target":34963})";
     std::string json;
     json += R"({"asset":{"version":"2.0","generator":"normalflow"},"extensionsUsed":["KHR_draco_mesh_compression"],)";
     json += R"("scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)";
-    json += R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"mode":4,)";
-    json += R"("extensions":{"KHR_draco_mesh_compression":{"bufferView":0,"attributes":{"POSITION":)" +
-            std::to_string(pa->unique_id()) + "}}}}]}],";
-    json += R"("accessors":[{"bufferView":1,"componentType":5126,"count":)" + std::to_string(np) +
-            R"(,"type":"VEC3","min":[)" + float_text(lo[0]) + "," + float_text(lo[1]) + "," + float_text(lo[2]) +
-            "],\"max\":[" + float_text(hi[0]) + "," + float_text(hi[1]) + "," + float_text(hi[2]) + "]},";
-    json += R"({"bufferView":2,"componentType":5125,"count":)" + std::to_string(3 * std::uint64_t(nf)) +
-            R"(,"type":"SCALAR"}],)";
-    json += R"("bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":)" + std::to_string(enc.size()) + "},";
-    json += R"({"buffer":0,"byteOffset":)" + std::to_string(pos_off) + R"(,"byteLength":)" + std::to_string(pos_len) +
-            R"(,"target":34962},)";
-    json += R"({"buffer":0,"byteOffset":)" + std::to_string(idx_off) + R"(,"byteLength":)" + std::to_string(idx_len) +
-            R"(,"target":34963}],)";
+    json += R"("meshes":[{"primitives":[{"attributes":{)" + attributes + R"(},"indices":)" + std::to_string(next - 1) +
+            R"(,"material":0,"mode":4,)";
+    json += R"("extensions":{"KHR_draco_mesh_compression":{"bufferView":0,"attributes":{)" + draco_ids + "}}}}]}],";
+    json += std::string(R"("materials":[)") + kGltfMaterial + "],";
+    json += R"("accessors":[)" + accessors + "],";
+    json += R"("bufferViews":[)" + views + "],";
     json += R"("buffers":[{"byteLength":)" + std::to_string(bin.size()) + "}]}";
     while (json.size() % 4) json.push_back(' ');
     const std::uint64_t total = 12 + 8 + json.size() + 8 + bin.size();
@@ -302,7 +446,7 @@ Mesh read_gltf(const std::string& path, ReadInfo* info) {
         }
         if (!dm) throw InvalidInput(who + ": no mesh decoded");
         ByteWriter w;
-        put_mesh(w, to_mesh(*dm, who));
+        put_mesh(w, to_mesh(*dm, who, ColorSpace::Linear, /*flip_v=*/true));
         return w.take();
     });
     ByteReader r(bytes, who);
@@ -333,7 +477,7 @@ Mesh read_drc(const std::string& path, ReadInfo* info) {
         if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
         const std::unique_ptr<draco::Mesh> dm = std::move(res).value();
         ByteWriter w;
-        put_mesh(w, to_mesh(*dm, who));
+        put_mesh(w, to_mesh(*dm, who, ColorSpace::Srgb, /*flip_v=*/false));
         return w.take();
     });
     ByteReader r(bytes, who);
@@ -349,7 +493,7 @@ Mesh read_drc(const std::string& path, ReadInfo* info) {
 void write_drc(const std::string& path, const Mesh& m, const DracoOptions& opt) {
     const std::string who = "write_drc: " + path;
     check_options(opt, who);
-    const auto dm = to_draco(m, who);
+    const auto dm = to_draco(m, who, /*linear_colors=*/false, /*flip_v=*/false);
     const draco::EncoderBuffer buf = encode(*dm, opt, who);
     write_buffer(path, "write_drc", buf.data(), buf.size());
 }
@@ -357,7 +501,7 @@ void write_drc(const std::string& path, const Mesh& m, const DracoOptions& opt) 
 void write_draco_glb(const std::string& path, const Mesh& m, const DracoOptions& opt) {
     const std::string who = "write_draco_glb: " + path;
     check_options(opt, who);
-    const auto dm = to_draco(m, who);
+    const auto dm = to_draco(m, who, /*linear_colors=*/true, /*flip_v=*/true);
     if (opt.fallback) {
         const std::string glb = draco_glb_with_fallback(*dm, opt, who);
         write_buffer(path, "write_draco_glb", glb.data(), glb.size());
@@ -367,6 +511,12 @@ void write_draco_glb(const std::string& path, const Mesh& m, const DracoOptions&
     co.compression_level = opt.compression_level;
     co.quantization_position.SetQuantizationBits(opt.position_bits);
     co.quantization_bits_normal = opt.normal_bits;
+    co.quantization_bits_tex_coord = opt.texcoord_bits;
+    draco::Material* material = dm->GetMaterialLibrary().MutableMaterial(0);
+    material->SetName("normalflow");
+    material->SetColorFactor(draco::Vector4f(0.8f, 0.8f, 0.8f, 1.0f));
+    material->SetMetallicFactor(0.0f);
+    material->SetRoughnessFactor(0.6f);
     dm->SetCompressionEnabled(true);
     dm->SetCompressionOptions(co);
     draco::GltfEncoder enc;

@@ -1,6 +1,7 @@
 #include "io/formats/format_util.h"
 
 #include "io/util/atomic_file.h"
+#include "core/errors.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -56,6 +57,11 @@ void validate_mesh_for_write(const Mesh& m, std::string_view who, std::string_vi
             if (v >= nv)
                 fail(who, name, "triangle " + std::to_string(i) + " has vertex index " + std::to_string(v) +
                                     ", but the mesh has " + std::to_string(nv) + " vertices");
+    try {
+        check_mesh(m, "");  // attribute sizes and finiteness
+    } catch (const InvalidInput& e) {
+        fail(who, name, std::string_view(e.what()).substr(2));  // drop check_mesh's ": " prefix
+    }
 }
 
 std::string split_warning(std::size_t n) {
@@ -63,7 +69,7 @@ std::string split_warning(std::size_t n) {
            " more than 3 corners (split into triangle fans)";
 }
 
-void write_ascii_vertices_and_faces(AtomicFile& f, std::string& buf, const Mesh& m) {
+void write_ascii_vertices_and_faces(AtomicFile& f, std::string& buf, const Mesh& m, bool attributes) {
     constexpr std::size_t kChunk = 1 << 20;
     buf.reserve(kChunk + 256);
     const auto flush = [&] {
@@ -72,12 +78,30 @@ void write_ascii_vertices_and_faces(AtomicFile& f, std::string& buf, const Mesh&
             buf.clear();
         }
     };
-    for (const Vec3f& v : m.positions) {
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        const Vec3f& v = m.positions[i];
         append_float(buf, v.x);
         buf += ' ';
         append_float(buf, v.y);
         buf += ' ';
         append_float(buf, v.z);
+        if (attributes) {
+            if (m.has_normals())
+                for (int a = 0; a < 3; ++a) {
+                    buf += ' ';
+                    append_float(buf, m.normals[i][a]);
+                }
+            if (m.has_colors())
+                for (int a = 0; a < 4; ++a) {
+                    buf += ' ';
+                    append_uint(buf, m.colors[i][std::size_t(a)]);
+                }
+            if (m.has_texcoords())
+                for (int a = 0; a < 2; ++a) {
+                    buf += ' ';
+                    append_float(buf, m.texcoords[i][std::size_t(a)]);
+                }
+        }
         buf += '\n';
         flush();
     }

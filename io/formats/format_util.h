@@ -39,7 +39,9 @@ std::string split_warning(std::size_t n);
 
 /// Writes the body that ASCII PLY and OFF share, "x y z" per vertex then "3 i j k" per face, to f
 /// in chunks of about 1 MiB. buf holds what comes before it (the header) and is left empty.
-void write_ascii_vertices_and_faces(AtomicFile& f, std::string& buf, const Mesh& m);
+/// With attributes, each vertex line goes on with the normal (3 floats), colour (4 integers) and
+/// texture coordinate (2 floats) that m has, in that order (ASCII PLY's vertex properties).
+void write_ascii_vertices_and_faces(AtomicFile& f, std::string& buf, const Mesh& m, bool attributes = false);
 
 /// Appends the shortest decimal text that reads back to exactly v (std::to_chars round trip).
 inline void append_float(std::string& out, float v) {

@@ -1,5 +1,6 @@
 #include "io/formats/gltf.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -60,21 +61,62 @@ void write_glb(const std::string& path, const Mesh& m) {
             if (idx >= nv)
                 throw InvalidInput(who + ": triangle " + std::to_string(f) + " has index " + std::to_string(idx) +
                                    ", expected < " + std::to_string(nv));
+    check_mesh(m, who);  // attribute sizes and values
 
-    const std::uint64_t pos_bytes = std::uint64_t(nv) * 12, idx_bytes = std::uint64_t(nf) * 12;
-    const std::uint64_t bin_bytes = pos_bytes + idx_bytes;  // both multiples of 4
+    // The BIN chunk: POSITION, then NORMAL, COLOR_0, TEXCOORD_0 as present (all float, little-endian),
+    // then the indices. Every part is a multiple of 4 bytes.
+    std::vector<float> attr;  // the optional attributes, one after the other
+    std::string attributes = R"("POSITION":0)", accessors, views;
+    std::uint64_t offset = std::uint64_t(nv) * 12;
+    int next = 1;  // accessor and buffer view index
+    views = R"({"buffer":0,"byteOffset":0,"byteLength":)" + std::to_string(offset) + R"(,"target":34962})";
+    accessors = R"({"bufferView":0,"componentType":5126,"count":)" + std::to_string(nv) +
+                R"(,"type":"VEC3","min":[)" + float_text(lo.x) + "," + float_text(lo.y) + "," + float_text(lo.z) +
+                "],\"max\":[" + float_text(hi.x) + "," + float_text(hi.y) + "," + float_text(hi.z) + "]}";
+    const auto add = [&](const char* name, const char* type, int comps, auto&& value) {
+        const std::size_t first = attr.size();
+        for (std::size_t i = 0; i < nv; ++i)
+            for (int c = 0; c < comps; ++c) attr.push_back(value(i, c));
+        const std::uint64_t bytes = std::uint64_t(attr.size() - first) * 4;
+        attributes += ",\"" + std::string(name) + "\":" + std::to_string(next);
+        accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":5126,"count":)" +
+                     std::to_string(nv) + R"(,"type":")" + type + "\"}";
+        views += R"(,{"buffer":0,"byteOffset":)" + std::to_string(offset) + R"(,"byteLength":)" +
+                 std::to_string(bytes) + R"(,"target":34962})";
+        offset += bytes;
+        ++next;
+    };
+    if (m.has_normals())
+        add("NORMAL", "VEC3", 3, [&](std::size_t i, int c) {
+            // glTF wants unit normals: a zero normal (undefined) is written as +z.
+            const Vec3f n = m.normals[i];
+            const float len = std::sqrt(dot(n, n));
+            return len > 0 ? n[c] / len : (c == 2 ? 1.0f : 0.0f);
+        });
+    if (m.has_colors())
+        add("COLOR_0", "VEC4", 4, [&](std::size_t i, int c) {
+            const float x = float(m.colors[i][std::size_t(c)]) / 255.0f;
+            return c == 3 ? x : srgb_to_linear(x);
+        });
+    if (m.has_texcoords())
+        add("TEXCOORD_0", "VEC2", 2, [&](std::size_t i, int c) {
+            return c == 0 ? m.texcoords[i][0] : 1.0f - m.texcoords[i][1];
+        });
+    const std::uint64_t idx_bytes = std::uint64_t(nf) * 12;
+    accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":5125,"count":)" +
+                 std::to_string(3 * std::uint64_t(nf)) + R"(,"type":"SCALAR"})";
+    views += R"(,{"buffer":0,"byteOffset":)" + std::to_string(offset) + R"(,"byteLength":)" +
+             std::to_string(idx_bytes) + R"(,"target":34963})";
+    const std::uint64_t bin_bytes = offset + idx_bytes;
+
     std::string json;
     json.reserve(1024);
     json += R"({"asset":{"version":"2.0","generator":"normalflow"},"scene":0,"scenes":[{"nodes":[0]}],)";
-    json += R"("nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1,"mode":4}]}],)";
-    json += R"("accessors":[{"bufferView":0,"componentType":5126,"count":)" + std::to_string(nv) +
-            R"(,"type":"VEC3","min":[)" + float_text(lo.x) + "," + float_text(lo.y) + "," + float_text(lo.z) +
-            "],\"max\":[" + float_text(hi.x) + "," + float_text(hi.y) + "," + float_text(hi.z) + "]},";
-    json += R"({"bufferView":1,"componentType":5125,"count":)" + std::to_string(3 * std::uint64_t(nf)) +
-            R"(,"type":"SCALAR"}],)";
-    json += R"("bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":)" + std::to_string(pos_bytes) +
-            R"(,"target":34962},{"buffer":0,"byteOffset":)" + std::to_string(pos_bytes) +
-            R"(,"byteLength":)" + std::to_string(idx_bytes) + R"(,"target":34963}],)";
+    json += R"("nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{)" + attributes +
+            R"(},"indices":)" + std::to_string(next) + R"(,"material":0,"mode":4}]}],)";
+    json += std::string(R"("materials":[)") + kGltfMaterial + "],";
+    json += R"("accessors":[)" + accessors + "],";
+    json += R"("bufferViews":[)" + views + "],";
     json += R"("buffers":[{"byteLength":)" + std::to_string(bin_bytes) + "}]}";
     while (json.size() % 4 != 0) json += ' ';
 
@@ -93,24 +135,34 @@ void write_glb(const std::string& path, const Mesh& m) {
     put_u32(f, kChunkBin);
     static_assert(sizeof(Vec3f) == 12 && sizeof(Tri) == 12, "tightly packed position/triangle types expected");
     if constexpr (std::endian::native == std::endian::little) {
-        f.write(m.positions.data(), pos_bytes);
+        f.write(m.positions.data(), std::uint64_t(nv) * 12);
+        f.write(attr.data(), attr.size() * 4);
         f.write(m.triangles.data(), idx_bytes);
     } else {
         std::vector<std::uint32_t> buf;
         buf.reserve(3 * 4096);
         auto flush = [&] { f.write(buf.data(), buf.size() * 4); buf.clear(); };
-        for (const Vec3f& p : m.positions) {
-            for (int a = 0; a < 3; ++a) buf.push_back(to_le(std::bit_cast<std::uint32_t>(p[a])));
+        auto put = [&](std::uint32_t v) {
+            buf.push_back(to_le(v));
             if (buf.size() >= 3 * 4096) flush();
-        }
-        flush();
-        for (const Tri& t : m.triangles) {
-            for (int a = 0; a < 3; ++a) buf.push_back(to_le(t[a]));
-            if (buf.size() >= 3 * 4096) flush();
-        }
+        };
+        for (const Vec3f& p : m.positions)
+            for (int a = 0; a < 3; ++a) put(std::bit_cast<std::uint32_t>(p[a]));
+        for (const float x : attr) put(std::bit_cast<std::uint32_t>(x));
+        for (const Tri& t : m.triangles)
+            for (int a = 0; a < 3; ++a) put(t[a]);
         flush();
     }
     f.commit();
+}
+
+float srgb_to_linear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+
+float linear_to_srgb(float c) {
+    c = std::clamp(c, 0.0f, 1.0f);
+    return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
 }
 
 }  // namespace normalflow

@@ -1,5 +1,8 @@
 // Wavefront OBJ reader and writer (see mesh_formats.h).
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -30,7 +33,7 @@ std::string quote_token(const char* p, const char* e) {
 }
 
 bool is_ignored_statement(std::string_view k) {
-    static constexpr std::string_view known[] = {"vt", "vn", "vp", "o", "g", "s", "usemtl", "mtllib",
+    static constexpr std::string_view known[] = {"vp", "o", "g", "s", "usemtl", "mtllib",
                                                  "l", "p", "cstype", "deg", "bmat", "step", "curv",
                                                  "curv2", "surf", "parm", "trim", "hole", "scrv", "sp",
                                                  "end", "con", "mg", "bevel", "c_interp", "d_interp",
@@ -39,6 +42,48 @@ bool is_ignored_statement(std::string_view k) {
     for (const auto& s : known)
         if (k == s) return true;
     return false;
+}
+
+/// Turns OBJ's per-corner texture coordinate and normal references into per-vertex attributes of m:
+/// a vertex takes the (vt, vn) of its first corner; a corner of the same vertex with another (vt, vn)
+/// gets a copy of the vertex (position and colour), one per distinct pair, appended after the file's
+/// vertices. Returns the number of copies. corner_ref holds 3 entries per triangle of m.
+std::size_t attach_corner_attributes(Mesh& m, const std::vector<std::array<std::int64_t, 2>>& corner_ref,
+                                     const std::vector<TexCoord>* texcoords, const std::vector<Vec3f>* normals) {
+    if (!texcoords && !normals) return 0;
+    const std::size_t nv = m.positions.size();
+    std::vector<std::array<std::int64_t, 2>> first(nv, {-2, -2});  // -2: no corner yet
+    std::map<std::array<std::int64_t, 3>, std::uint32_t> copies;
+    auto key_of = [&](const std::array<std::int64_t, 2>& r) {
+        return std::array<std::int64_t, 2>{texcoords ? r[0] : -1, normals ? r[1] : -1};
+    };
+    for (std::size_t t = 0; t < m.triangles.size(); ++t)
+        for (std::size_t c = 0; c < 3; ++c) {
+            std::uint32_t& v = m.triangles[t][c];
+            const auto key = key_of(corner_ref[3 * t + c]);
+            if (first[v][0] == -2) {
+                first[v] = key;
+            } else if (first[v] != key) {
+                const auto [it, fresh] = copies.try_emplace({std::int64_t(v), key[0], key[1]}, std::uint32_t(first.size()));
+                if (fresh) {
+                    m.positions.push_back(m.positions[v]);
+                    if (m.has_colors()) m.colors.push_back(m.colors[v]);
+                    first.push_back(key);
+                }
+                v = it->second;
+            }
+        }
+    if (texcoords) {
+        m.texcoords.assign(first.size(), TexCoord{0.0f, 0.0f});
+        for (std::size_t v = 0; v < first.size(); ++v)
+            if (first[v][0] >= 0) m.texcoords[v] = (*texcoords)[std::size_t(first[v][0])];
+    }
+    if (normals) {
+        m.normals.assign(first.size(), Vec3f{});
+        for (std::size_t v = 0; v < first.size(); ++v)
+            if (first[v][1] >= 0) m.normals[v] = (*normals)[std::size_t(first[v][1])];
+    }
+    return copies.size();
 }
 
 }  // namespace
@@ -55,6 +100,12 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
 
     Mesh m;
     std::vector<std::uint32_t> poly;
+    std::vector<Rgba8> colors;         // per v line, once any has a colour
+    std::vector<TexCoord> texcoords;   // vt lines
+    std::vector<Vec3f> normals;        // vn lines
+    std::vector<std::array<std::int64_t, 2>> poly_ref, corner_ref;  // per corner: vt, vn (0-based, -1 absent)
+    bool any_ref[2] = {false, false};
+    std::pair<std::int64_t, std::size_t> max_ref[2] = {{-1, 0}, {-1, 0}};  // largest positive reference, its line
     std::size_t faces = 0, split = 0, unknown = 0, first_unknown_line = 0;
     std::string first_unknown;
     std::int64_t max_index = -1;  // largest 0-based index from a positive reference
@@ -88,7 +139,42 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                                                  : "expected a coordinate, found " + quote_token(s, le));
             }
             if (!is_finite(v)) fail_line(kReader, name, line, "vertex has a NaN or infinite coordinate");
+            // optional w, or a colour r g b (0..1, the common extension; values above 1 are read as 0..255)
+            float extra[3];
+            int n_extra = 0;
+            for (; n_extra < 3; ++n_extra) {
+                skip_space(q, le);
+                if (q == le || !detail::parse_float(q, le, extra[n_extra])) break;
+            }
             m.positions.push_back(v);
+            if (n_extra == 3) {
+                if (colors.empty()) colors.resize(m.positions.size() - 1, Rgba8{255, 255, 255, 255});
+                const bool bytes01 = extra[0] > 1.0f || extra[1] > 1.0f || extra[2] > 1.0f;
+                Rgba8 c{0, 0, 0, 255};
+                for (int a = 0; a < 3; ++a) {
+                    const float x = std::isfinite(extra[a]) ? extra[a] * (bytes01 ? 1.0f : 255.0f) : 0.0f;
+                    c[std::size_t(a)] = std::uint8_t(std::lround(std::clamp(x, 0.0f, 255.0f)));
+                }
+                colors.push_back(c);
+            } else if (!colors.empty()) {
+                colors.push_back(Rgba8{255, 255, 255, 255});
+            }
+        } else if (key == "vt" || key == "vn") {
+            const int dims = key == "vt" ? 2 : 3;
+            float c[3] = {0, 0, 0};
+            for (int a = 0; a < dims; ++a) {
+                skip_space(q, le);
+                const char* s = q;
+                // vt's second coordinate is optional ("vt u"); vn needs all three
+                if (q == le && key == "vt" && a == 1) break;
+                if (q == le || !detail::parse_float(q, le, c[a]) || (q < le && !detail::is_space(*q)))
+                    fail_line(kReader, name, line, std::string(key) + " expects " + std::to_string(dims) +
+                                                       " numbers, found " + (q == le && s == le ? std::string("fewer")
+                                                                                            : quote_token(s, le)));
+                if (!std::isfinite(c[a])) c[a] = 0.0f;
+            }
+            if (key == "vt") texcoords.push_back(TexCoord{c[0], c[1]});
+            else normals.push_back(Vec3f{c[0], c[1], c[2]});
         } else if (key == "f") {
             poly.clear();
             const auto nv = std::int64_t(m.positions.size());
@@ -98,11 +184,11 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                 const char* s = q;
                 std::int64_t idx = 0;
                 bool ok = detail::parse_int(q, le, idx);
-                // optional /vt, //vn or /vt/vn: the numbers are checked for syntax only
+                // optional /vt, //vn or /vt/vn
+                std::int64_t tn[2] = {0, 0};  // 1-based or negative as in the file, 0 = absent
                 for (int slash = 0; ok && slash < 2 && q < le && *q == '/'; ++slash) {
                     ++q;
-                    std::int64_t ignored = 0;
-                    if (q < le && *q != '/' && !detail::is_space(*q)) ok = detail::parse_int(q, le, ignored);
+                    if (q < le && *q != '/' && !detail::is_space(*q)) ok = detail::parse_int(q, le, tn[slash]);
                 }
                 if (!ok || (q < le && !detail::is_space(*q)))
                     fail_line(kReader, name, line, "expected a face corner (v, v/vt, v//vn or v/vt/vn), found " +
@@ -126,6 +212,18 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                     }
                 }
                 poly.push_back(std::uint32_t(r));
+                std::array<std::int64_t, 2> ref{-1, -1};  // 0-based vt, vn index, -1 = absent
+                const std::size_t counts[2] = {texcoords.size(), normals.size()};
+                for (int k = 0; k < 2; ++k) {
+                    if (tn[k] == 0) continue;
+                    ref[std::size_t(k)] = tn[k] < 0 ? std::int64_t(counts[k]) + tn[k] : tn[k] - 1;
+                    if (ref[std::size_t(k)] < 0)
+                        fail_line(kReader, name, line, std::string(k ? "normal" : "texture coordinate") + " index " +
+                                                           std::to_string(tn[k]) + " reaches before the first one");
+                    if (tn[k] > 0) max_ref[k] = std::max(max_ref[k], std::make_pair(ref[std::size_t(k)], line));
+                    any_ref[k] = true;
+                }
+                poly_ref.push_back(ref);
             }
             if (poly.size() < 3)
                 fail_line(kReader, name, line,
@@ -133,6 +231,9 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
             ++faces;
             if (poly.size() > 3) ++split;
             detail::push_fan(m.triangles, poly.data(), poly.size());
+            for (std::size_t k = 1; k + 1 < poly_ref.size(); ++k)
+                for (const std::size_t c : {std::size_t(0), k, k + 1}) corner_ref.push_back(poly_ref[c]);
+            poly_ref.clear();
         } else if (!is_ignored_statement(key)) {
             if (unknown++ == 0) {
                 first_unknown = quote_token(kw, le);
@@ -145,6 +246,17 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                   "vertex index " + std::to_string(max_index + 1) + " out of range (the file has " +
                       std::to_string(m.positions.size()) + " vertices)");
     if (faces == 0) fail(kReader, name, "no faces (" + std::to_string(m.positions.size()) + " vertices, no 'f' lines)");
+    for (int k = 0; k < 2; ++k) {
+        const std::size_t count = k ? normals.size() : texcoords.size();
+        if (max_ref[k].first >= std::int64_t(count))
+            fail_line(kReader, name, max_ref[k].second,
+                      std::string(k ? "normal" : "texture coordinate") + " index " +
+                          std::to_string(max_ref[k].first + 1) + " out of range (the file has " +
+                          std::to_string(count) + ")");
+    }
+    if (!colors.empty()) m.colors = std::move(colors);
+    const std::size_t split_vertices = attach_corner_attributes(m, corner_ref, any_ref[0] ? &texcoords : nullptr,
+                                                                any_ref[1] ? &normals : nullptr);
 
     if (info) {
         *info = ReadInfo{};
@@ -153,6 +265,10 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
         info->file_faces = faces;
         info->polygons_split = split;
         if (split) info->warnings.push_back(detail::split_warning(split));
+        if (split_vertices)
+            info->warnings.push_back(std::to_string(split_vertices) +
+                                     " vertices duplicated where their corners have different texture coordinates "
+                                     "or normals");
         if (unknown)
             info->warnings.push_back(std::to_string(unknown) + " lines with unknown statements ignored (first: " +
                                      first_unknown + " at line " + std::to_string(first_unknown_line) + ")");
@@ -172,24 +288,44 @@ void write_obj(const std::string& path, const Mesh& m, const WriteOptions&) {
     std::string buf;
     buf.reserve(kChunk + 256);
     buf += "# written by normalflow\n";
-    for (const Vec3f& v : m.positions) {
-        buf += "v ";
-        detail::append_float(buf, v.x);
-        buf += ' ';
-        detail::append_float(buf, v.y);
-        buf += ' ';
-        detail::append_float(buf, v.z);
-        buf += '\n';
+    const auto flush = [&] {
         if (buf.size() >= kChunk) {
             f.write(buf);
             buf.clear();
         }
+    };
+    const auto floats = [&](const char* key, const float* x, int n) {
+        buf += key;
+        for (int a = 0; a < n; ++a) {
+            buf += ' ';
+            detail::append_float(buf, x[a]);
+        }
+        buf += '\n';
+        flush();
+    };
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        const Vec3f& v = m.positions[i];
+        float x[6] = {v.x, v.y, v.z, 0, 0, 0};
+        if (m.has_colors())
+            for (int a = 0; a < 3; ++a) x[3 + a] = float(m.colors[i][std::size_t(a)]) / 255.0f;
+        floats("v", x, m.has_colors() ? 6 : 3);
+    }
+    for (const TexCoord& t : m.texcoords) floats("vt", t.data(), 2);
+    for (const Vec3f& n : m.normals) {
+        const float x[3] = {n.x, n.y, n.z};
+        floats("vn", x, 3);
     }
     for (const Tri& t : m.triangles) {
         buf += 'f';
         for (const std::uint32_t i : t) {
             buf += ' ';
             detail::append_uint(buf, std::uint64_t(i) + 1);
+            if (m.has_texcoords() || m.has_normals()) buf += '/';
+            if (m.has_texcoords()) detail::append_uint(buf, std::uint64_t(i) + 1);
+            if (m.has_normals()) {
+                buf += '/';
+                detail::append_uint(buf, std::uint64_t(i) + 1);
+            }
         }
         buf += '\n';
         if (buf.size() >= kChunk) {

@@ -1,6 +1,8 @@
 // Stanford PLY reader and writer (see mesh_formats.h).
 #include "io/formats/mesh_formats.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <string>
@@ -206,12 +208,55 @@ void check_counts(const Header& h, std::size_t available, const std::string& nam
     }
 }
 
+// Vertex attribute slots: 0..2 normal x, y, z; 3..6 red, green, blue, alpha; 7..8 texture u, v.
+constexpr int kSlotNormal = 0, kSlotColor = 3, kSlotTex = 7, kSlots = 9;
+
+/// The attribute slot a vertex property name fills, or -1.
+int attribute_slot(std::string_view n) {
+    struct Entry { std::string_view name; int slot; };
+    static constexpr Entry table[] = {
+        {"nx", 0}, {"ny", 1}, {"nz", 2}, {"normal_x", 0}, {"normal_y", 1}, {"normal_z", 2},
+        {"red", 3}, {"green", 4}, {"blue", 5}, {"alpha", 6}, {"r", 3}, {"g", 4}, {"b", 5}, {"a", 6},
+        {"diffuse_red", 3}, {"diffuse_green", 4}, {"diffuse_blue", 5}, {"diffuse_alpha", 6},
+        {"s", 7}, {"t", 8}, {"u", 7}, {"v", 8}, {"texture_u", 7}, {"texture_v", 8},
+        {"texture_s", 7}, {"texture_t", 8}};
+    for (const auto& e : table)
+        if (e.name == n) return e.slot;
+    return -1;
+}
+
 struct Layout {
     const Element* vertex = nullptr;
     int xyz[3] = {-1, -1, -1};  // property indices of x, y, z in vertex
     const Element* face = nullptr;
     int indices = -1;           // property index of vertex_indices in face
+    std::vector<int> slot;      // per vertex property: the attribute slot it fills, or -1
+    bool normals = false, colors = false, texcoords = false;
 };
+
+/// Sizes m's attribute arrays for the attributes L found (alpha defaults to opaque).
+void allocate_attributes(const Layout& L, Mesh& m) {
+    const std::size_t n = m.positions.size();
+    if (L.normals) m.normals.assign(n, Vec3f{});
+    if (L.colors) m.colors.assign(n, Rgba8{255, 255, 255, 255});
+    if (L.texcoords) m.texcoords.assign(n, TexCoord{0.0f, 0.0f});
+}
+
+/// Stores value v of a vertex property of type t into attribute slot `slot` of vertex i. Colours of
+/// integer type are taken as 0..255 (uint16 as 0..65535), float colours as 0..1; non-finite normals
+/// and texture coordinates become 0.
+void store_attribute(const Layout& L, Mesh& m, std::size_t i, int slot, double v, PType t) {
+    if (slot < kSlotColor) {
+        if (L.normals) m.normals[i][slot - kSlotNormal] = std::isfinite(v) ? float(v) : 0.0f;
+    } else if (slot < kSlotTex) {
+        if (!L.colors) return;
+        const double scaled = t == PType::U16 ? v / 257.0 : is_integer(t) ? v : v * 255.0;
+        m.colors[i][std::size_t(slot - kSlotColor)] =
+            std::uint8_t(std::lround(std::clamp(std::isfinite(scaled) ? scaled : 0.0, 0.0, 255.0)));
+    } else if (L.texcoords) {
+        m.texcoords[i][std::size_t(slot - kSlotTex)] = std::isfinite(v) ? float(v) : 0.0f;
+    }
+}
 
 Layout find_layout(const Header& h, const std::string& name) {
     Layout L;
@@ -230,6 +275,19 @@ Layout find_layout(const Header& h, const std::string& name) {
     }
     if (L.xyz[0] < 0 || L.xyz[1] < 0 || L.xyz[2] < 0)
         detail::fail_line(kReader, name, L.vertex->line, "vertex element lacks an x, y or z property");
+    bool seen[kSlots] = {};
+    L.slot.assign(L.vertex->props.size(), -1);
+    for (std::size_t i = 0; i < L.vertex->props.size(); ++i) {
+        const Property& p = L.vertex->props[i];
+        const int s = p.is_list ? -1 : attribute_slot(p.name);
+        if (s >= 0 && !seen[s]) {
+            seen[s] = true;
+            L.slot[i] = s;
+        }
+    }
+    L.normals = seen[0] && seen[1] && seen[2];
+    L.colors = seen[3] && seen[4] && seen[5];
+    L.texcoords = seen[7] && seen[8];
     if (!L.face) detail::fail(kReader, name, "no 'face' element in the header (a point cloud, not a mesh)");
     for (int i = 0; i < int(L.face->props.size()); ++i) {
         const Property& p = L.face->props[std::size_t(i)];
@@ -282,6 +340,10 @@ void read_binary(std::string_view bytes, const Header& h, const Layout& L, const
                                            offset[std::size_t(L.xyz[2])]};
                 const bool all_float = px[0]->type == PType::F32 && px[1]->type == PType::F32 && px[2]->type == PType::F32;
                 for (std::size_t i = 0; i < nv; ++i, p += stride) {
+                    for (std::size_t k = 0; k < e.props.size(); ++k)
+                        if (L.slot[k] >= 0)
+                            store_attribute(L, m, i, L.slot[k], load_double(p + offset[k], e.props[k].type, be),
+                                            e.props[k].type);
                     Vec3f& v = m.positions[i];
                     if (all_float) {
                         v = {detail::load_scalar<float>(p + ox[0], be), detail::load_scalar<float>(p + ox[1], be),
@@ -309,11 +371,14 @@ void read_binary(std::string_view bytes, const Header& h, const Layout& L, const
                 if (!pr.is_list) {
                     const std::size_t sz = type_size(pr.type);
                     if (std::size_t(end - p) < sz) truncated(e, i);
-                    if (is_vertex)
+                    if (is_vertex) {
                         for (int a = 0; a < 3; ++a)
                             if (int(k) == L.xyz[a] && !to_float(load_double(p, pr.type, be), m.positions[i][a]))
                                 detail::fail(kReader, name, "vertex " + std::to_string(i) +
                                                                 " has a NaN, infinite or out-of-float-range coordinate");
+                        if (L.slot[k] >= 0)
+                            store_attribute(L, m, std::size_t(i), L.slot[k], load_double(p, pr.type, be), pr.type);
+                    }
                     p += sz;
                     continue;
                 }
@@ -392,13 +457,14 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
             fail_line(kReader, name, tk.line, "expected an integer, found " + printable(t));
         return v;
     };
-    auto number = [&](std::string_view t) {
+    auto number = [&](std::string_view t) -> double {
         double v = 0;
         const char* s = t.data();
         if (s < t.data() + t.size() && *s == '+') ++s;
         const auto r = std::from_chars(s, t.data() + t.size(), v);
         if ((r.ec != std::errc{} && r.ec != std::errc::result_out_of_range) || r.ptr != t.data() + t.size())
             fail_line(kReader, name, tk.line, "expected a number, found " + printable(t));
+        return v;
     };
     for (const Element& e : h.elements) {
         const bool is_vertex = &e == L.vertex, is_face = &e == L.face;
@@ -420,6 +486,8 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
                             fail_line(kReader, name, tk.line, "expected a coordinate, found " + printable(t));
                         if (!std::isfinite(f))
                             fail_line(kReader, name, tk.line, "vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
+                    } else if (is_vertex && L.slot[k] >= 0) {
+                        store_attribute(L, m, std::size_t(i), L.slot[k], number(t), pr.type);
                     } else {
                         number(t);
                     }
@@ -471,6 +539,7 @@ Mesh read_ply_memory(std::string_view bytes, const std::string& name, ReadInfo* 
     Mesh m;
     m.positions.resize(std::size_t(L.vertex->count));
     m.triangles.reserve(std::size_t(L.face->count));
+    allocate_attributes(L, m);
     FaceSink sink{m, {}, 0};
     std::size_t trailing = 0;
     if (h.encoding == Encoding::Ascii) {
@@ -508,7 +577,11 @@ void write_ply(const std::string& path, const Mesh& m, const WriteOptions& opt) 
     buf += opt.binary ? "binary_little_endian" : "ascii";
     buf += " 1.0\ncomment written by normalflow\nelement vertex ";
     detail::append_uint(buf, m.positions.size());
-    buf += "\nproperty float x\nproperty float y\nproperty float z\nelement face ";
+    buf += "\nproperty float x\nproperty float y\nproperty float z\n";
+    if (m.has_normals()) buf += "property float nx\nproperty float ny\nproperty float nz\n";
+    if (m.has_colors()) buf += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty uchar alpha\n";
+    if (m.has_texcoords()) buf += "property float s\nproperty float t\n";
+    buf += "element face ";
     detail::append_uint(buf, m.triangles.size());
     buf += "\nproperty list uchar int vertex_indices\nend_header\n";
     constexpr std::size_t kChunk = 1 << 20;
@@ -519,10 +592,17 @@ void write_ply(const std::string& path, const Mesh& m, const WriteOptions& opt) 
         }
     };
     if (opt.binary) {
-        for (const Vec3f& v : m.positions) {
+        for (std::size_t i = 0; i < m.positions.size(); ++i) {
+            const Vec3f& v = m.positions[i];
             detail::append_le(buf, v.x);
             detail::append_le(buf, v.y);
             detail::append_le(buf, v.z);
+            if (m.has_normals())
+                for (int a = 0; a < 3; ++a) detail::append_le(buf, m.normals[i][a]);
+            if (m.has_colors())
+                for (const std::uint8_t c : m.colors[i]) buf += char(c);
+            if (m.has_texcoords())
+                for (const float c : m.texcoords[i]) detail::append_le(buf, c);
             flush();
         }
         for (const Tri& t : m.triangles) {
@@ -531,7 +611,7 @@ void write_ply(const std::string& path, const Mesh& m, const WriteOptions& opt) 
             flush();
         }
     } else {
-        detail::write_ascii_vertices_and_faces(f, buf, m);
+        detail::write_ascii_vertices_and_faces(f, buf, m, /*attributes=*/true);
     }
     f.write(buf);
     f.commit();

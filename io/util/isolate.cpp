@@ -158,12 +158,18 @@ void ByteReader::fail() const {
 void put_mesh(ByteWriter& w, const Mesh& m) {
     w.put_array(m.positions);
     w.put_array(m.triangles);
+    w.put_array(m.normals);
+    w.put_array(m.colors);
+    w.put_array(m.texcoords);
 }
 
 Mesh get_mesh(ByteReader& r) {
     Mesh m;
     m.positions = r.get_array<Vec3f>();
     m.triangles = r.get_array<Tri>();
+    m.normals = r.get_array<Vec3f>();
+    m.colors = r.get_array<Rgba8>();
+    m.texcoords = r.get_array<TexCoord>();
     return m;
 }
 

@@ -9,8 +9,9 @@ namespace normalflow {
 /// .drc and, in builds with Draco, .glb).
 struct DracoOptions {
     int position_bits = 14;     ///< bits per position axis, 1..30 (0 = lossless float storage is NOT supported)
-    int normal_bits = 10;       ///< bits per normal component, 1..30 (normalflow meshes carry no normals;
-                                ///< kept for files with normals and future use)
+    int normal_bits = 10;       ///< bits per normal component, 1..30 (meshes with normals: smooth's output,
+                                ///< or an input that had them)
+    int texcoord_bits = 12;     ///< bits per texture coordinate component, 1..30
     int compression_level = 7;  ///< 0 (fastest, largest) .. 10 (slowest, smallest); Draco speed = 10 - level
     bool fallback = false;      ///< write_draco_glb only: also store uncompressed (dequantized) positions and
                                 ///< indices, and list KHR_draco_mesh_compression as used but not required,

@@ -1,5 +1,6 @@
 #include "core/mesh.h"
 
+#include <cmath>
 #include <string>
 
 #include "core/errors.h"
@@ -16,6 +17,20 @@ void check_mesh(const Mesh& m, std::string_view who) {
     for (std::size_t i = 0; i < n; ++i)
         if (!is_finite(m.positions[i]))
             throw InvalidInput(std::string(who) + ": vertex " + std::to_string(i) + " has a non-finite coordinate");
+    auto sized = [&](std::size_t k, const char* what) {
+        if (k != 0 && k != n)
+            throw InvalidInput(std::string(who) + ": " + std::to_string(k) + " " + what + " for " + std::to_string(n) +
+                               " vertices");
+    };
+    sized(m.normals.size(), "normals");
+    sized(m.colors.size(), "colours");
+    sized(m.texcoords.size(), "texture coordinates");
+    for (std::size_t i = 0; i < m.normals.size(); ++i)
+        if (!is_finite(m.normals[i]))
+            throw InvalidInput(std::string(who) + ": normal " + std::to_string(i) + " is not finite");
+    for (std::size_t i = 0; i < m.texcoords.size(); ++i)
+        if (!std::isfinite(m.texcoords[i][0]) || !std::isfinite(m.texcoords[i][1]))
+            throw InvalidInput(std::string(who) + ": texture coordinate " + std::to_string(i) + " is not finite");
 }
 
 }  // namespace normalflow

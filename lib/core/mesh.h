@@ -16,12 +16,38 @@ namespace normalflow {
 /// Three vertex indices, counter-clockwise seen from outside for a well-oriented closed mesh.
 using Tri = std::array<std::uint32_t, 3>;
 
+/// A vertex colour: red, green, blue, alpha, 8 bits each, as PLY and OBJ files store them (sRGB-encoded;
+/// the glTF reader and writer convert to and from glTF's linear COLOR_0).
+using Rgba8 = std::array<std::uint8_t, 4>;
+
+/// A texture coordinate (u, v) with v pointing up, as OBJ and PLY store it (glTF's v points down and
+/// is flipped by its reader and writer).
+using TexCoord = std::array<float, 2>;
+
 /// Indexed triangles in world units. positions: #V points; triangles: #F index triples into positions.
+///
+/// The per-vertex attributes are optional: each is empty or holds one entry per position, in the same
+/// order. A stage that keeps the vertices (a fit, a smoothing that moves points) keeps colours and
+/// texture coordinates and drops or recomputes normals; a stage that builds new vertices drops them
+/// or transfers them, and says which in its documentation. check_mesh enforces the sizes.
 struct Mesh {
     std::vector<Vec3f> positions;
     std::vector<Tri> triangles;
+    std::vector<Vec3f> normals;        ///< unit vertex normals (zero where undefined), or empty
+    std::vector<Rgba8> colors;         ///< vertex colours, or empty
+    std::vector<TexCoord> texcoords;   ///< vertex texture coordinates, or empty
 
     bool empty() const { return triangles.empty(); }
+    bool has_normals() const { return !normals.empty(); }
+    bool has_colors() const { return !colors.empty(); }
+    bool has_texcoords() const { return !texcoords.empty(); }
+    bool has_attributes() const { return has_normals() || has_colors() || has_texcoords(); }
+    /// Removes normals, colours and texture coordinates (for stages that build new vertices).
+    void clear_attributes() {
+        normals.clear();
+        colors.clear();
+        texcoords.clear();
+    }
 };
 
 /// Axis-aligned bounding box of the referenced and unreferenced points alike; min > max when empty.
@@ -36,11 +62,12 @@ struct Box3d {
 };
 
 /// Checks the Mesh invariant that every stage relies on: every triangle index is below
-/// positions.size() and every position (used by a triangle or not) is finite. An empty mesh passes
+/// positions.size(), every position (used by a triangle or not) is finite, and each attribute array is
+/// empty or as long as positions, with finite normals and texture coordinates. An empty mesh passes
 /// (stages that need triangles say so themselves). Indices are checked first.
 /// \param who  message prefix naming the caller, e.g. "scan_convert"
 /// \throw InvalidInput "who: triangle 3 has vertex index 9, expected < 8" or
-///        "who: vertex 7 has a non-finite coordinate".
+///        "who: vertex 7 has a non-finite coordinate" or "who: 5 normals for 8 vertices".
 /// Cost: one pass over the triangles and one over the positions; single-threaded.
 void check_mesh(const Mesh& m, std::string_view who);
 
