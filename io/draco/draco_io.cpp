@@ -86,6 +86,11 @@ void check_glb(const std::vector<char>& d, const std::string& who) {
     if (chunk == 0) throw InvalidInput(who + ": GLB file has no JSON chunk");
 }
 
+/// Bits per linear colour component in Draco-compressed glTF: enough that every 8-bit sRGB value comes
+/// back (the smallest step between two sRGB bytes is 1/255/12.92 = 3.0e-4 in linear; 12 bits give a
+/// worst error of 1.2e-4).
+constexpr int kLinearColorBits = 12;
+
 /// Where a decoded Draco mesh came from: glTF stores colours linear, .drc files (draco_encoder from
 /// PLY/OBJ) as the 8-bit sRGB values of the source.
 enum class ColorSpace { Srgb, Linear };
@@ -117,8 +122,8 @@ Rgba8 read_color(const draco::PointAttribute& a, draco::AttributeValueIndex i, C
 /// Copies POSITION, faces and NORMAL, COLOR and TEX_COORD (the first of each) of a decoded Draco mesh;
 /// validates. Without attributes, points with equal positions are one vertex (Draco's position
 /// values); with attributes, every Draco point is a vertex (a seam keeps its two sides).
-/// flip_v: glTF's texture v points down, normalflow's up.
-Mesh to_mesh(const draco::Mesh& dm, const std::string& who, ColorSpace colors, bool flip_v) {
+/// Texture v is taken as it is: Draco's glTF decoder already turned glTF's downward v upward.
+Mesh to_mesh(const draco::Mesh& dm, const std::string& who, ColorSpace colors) {
     const draco::PointAttribute* pa = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
     if (!pa) throw InvalidInput(who + ": no POSITION attribute");
     if (pa->num_components() < 3) throw InvalidInput(who + ": POSITION has " + std::to_string(pa->num_components()) +
@@ -165,7 +170,7 @@ Mesh to_mesh(const draco::Mesh& dm, const std::string& who, ColorSpace colors, b
             ta->ConvertValue<float>(value(ta, i), 2, t);
             for (float& x : t)
                 if (!std::isfinite(x)) x = 0;
-            m.texcoords[i] = {t[0], flip_v ? 1.0f - t[1] : t[1]};
+            m.texcoords[i] = {t[0], t[1]};
         }
     }
     m.triangles.resize(dm.num_faces());
@@ -240,13 +245,18 @@ std::unique_ptr<draco::Mesh> to_draco(const Mesh& m, const std::string& who, boo
                 const float v[3] = {n.x, n.y, n.z};
                 a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), v);
             });
-    if (m.has_colors())
+    // glTF's linear colours are stored as floats, quantised by Draco to kLinearColorBits: 8 linear bits
+    // would merge the dark sRGB shades (sRGB 0..12 all fall on linear 0..1/255).
+    if (m.has_colors() && linear_colors)
+        add(draco::GeometryAttribute::COLOR, 4, draco::DT_FLOAT32, false, 16, [&](draco::PointAttribute* a, std::size_t i) {
+            const Rgba8 c = m.colors[i];
+            float v[4];
+            for (std::size_t k = 0; k < 4; ++k) v[k] = k < 3 ? srgb_to_linear(float(c[k]) / 255.0f) : float(c[k]) / 255.0f;
+            a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), v);
+        });
+    else if (m.has_colors())
         add(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true, 4, [&](draco::PointAttribute* a, std::size_t i) {
-            Rgba8 c = m.colors[i];
-            if (linear_colors)
-                for (std::size_t k = 0; k < 3; ++k)
-                    c[k] = std::uint8_t(std::lround(255.0f * srgb_to_linear(float(c[k]) / 255.0f)));
-            a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), c.data());
+            a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), m.colors[i].data());
         });
     if (m.has_texcoords())
         add(draco::GeometryAttribute::TEX_COORD, 2, draco::DT_FLOAT32, false, 8,
@@ -268,6 +278,7 @@ draco::EncoderBuffer encode(const draco::Mesh& dm, const DracoOptions& opt, cons
     enc.SetAttributeQuantization(draco::GeometryAttribute::POSITION, opt.position_bits);
     enc.SetAttributeQuantization(draco::GeometryAttribute::NORMAL, opt.normal_bits);
     enc.SetAttributeQuantization(draco::GeometryAttribute::TEX_COORD, opt.texcoord_bits);
+    enc.SetAttributeQuantization(draco::GeometryAttribute::COLOR, kLinearColorBits);  // float colours only
     const int speed = 10 - opt.compression_level;
     enc.SetSpeedOptions(speed, speed);
     enc.SetEncodingMethod(draco::MESH_EDGEBREAKER_ENCODING);
@@ -339,7 +350,7 @@ std::string draco_glb_with_fallback(const draco::Mesh& dm, const DracoOptions& o
                         std::to_string(pos_len) + R"(,"target":34962})";
     int next = 1;  // accessor index; its buffer view is next + 1
     // The optional attributes, decoded as the Draco decoder yields them: NORMAL and TEXCOORD_0 as float,
-    // COLOR_0 as normalized unsigned bytes (4 per point, so every part stays 4-byte aligned).
+    // COLOR_0 as float (the linear values write_draco_glb gives Draco).
     struct Extra { draco::GeometryAttribute::Type type; const char* name; const char* vec; int comps; };
     for (const Extra e : {Extra{draco::GeometryAttribute::NORMAL, "NORMAL", "VEC3", 3},
                           Extra{draco::GeometryAttribute::COLOR, "COLOR_0", "VEC4", 4},
@@ -347,24 +358,17 @@ std::string draco_glb_with_fallback(const draco::Mesh& dm, const DracoOptions& o
         const draco::PointAttribute* a = d->GetNamedAttribute(e.type);
         if (!a) continue;
         const std::size_t off = bin.size();
-        const bool bytes = e.type == draco::GeometryAttribute::COLOR;
         for (std::uint32_t p = 0; p < np; ++p) {
             const draco::AttributeValueIndex v = a->mapped_index(draco::PointIndex(p));
-            if (bytes) {
-                std::uint8_t c[4] = {255, 255, 255, 255};
-                a->ConvertValue<std::uint8_t>(v, std::int8_t(std::min<int>(a->num_components(), 4)), c);
-                bin.append(reinterpret_cast<const char*>(c), 4);
-            } else {
-                float x[3] = {0, 0, 0};
-                a->ConvertValue<float>(v, std::int8_t(e.comps), x);
-                for (int k = 0; k < e.comps; ++k) append_u32(bin, std::bit_cast<std::uint32_t>(x[k]));
-            }
+            float x[4] = {0, 0, 0, 1};
+            a->ConvertValue<float>(v, std::int8_t(std::min<int>(a->num_components(), e.comps)), x);
+            for (int k = 0; k < e.comps; ++k) append_u32(bin, std::bit_cast<std::uint32_t>(x[k]));
         }
         ++next;
         attributes += ",\"" + std::string(e.name) + "\":" + std::to_string(next - 1);
         draco_ids += ",\"" + std::string(e.name) + "\":" + std::to_string(a->unique_id());
         accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":)" +
-                     (bytes ? R"(5121,"normalized":true)" : "5126") + R"(,"count":)" + std::to_string(np) +
+                     "5126" + R"(,"count":)" + std::to_string(np) +
                      R"(,"type":")" + e.vec + "\"}";
         views += R"(,{"buffer":0,"byteOffset":)" + std::to_string(off) + R"(,"byteLength":)" +
                  std::to_string(bin.size() - off) + R"(,"target":34962})";
@@ -446,7 +450,7 @@ Mesh read_gltf(const std::string& path, ReadInfo* info) {
         }
         if (!dm) throw InvalidInput(who + ": no mesh decoded");
         ByteWriter w;
-        put_mesh(w, to_mesh(*dm, who, ColorSpace::Linear, /*flip_v=*/true));
+        put_mesh(w, to_mesh(*dm, who, ColorSpace::Linear));
         return w.take();
     });
     ByteReader r(bytes, who);
@@ -477,7 +481,7 @@ Mesh read_drc(const std::string& path, ReadInfo* info) {
         if (!res.ok()) throw InvalidInput(who + ": " + res.status().error_msg_string());
         const std::unique_ptr<draco::Mesh> dm = std::move(res).value();
         ByteWriter w;
-        put_mesh(w, to_mesh(*dm, who, ColorSpace::Srgb, /*flip_v=*/false));
+        put_mesh(w, to_mesh(*dm, who, ColorSpace::Srgb));
         return w.take();
     });
     ByteReader r(bytes, who);
@@ -501,7 +505,9 @@ void write_drc(const std::string& path, const Mesh& m, const DracoOptions& opt) 
 void write_draco_glb(const std::string& path, const Mesh& m, const DracoOptions& opt) {
     const std::string who = "write_draco_glb: " + path;
     check_options(opt, who);
-    const auto dm = to_draco(m, who, /*linear_colors=*/true, /*flip_v=*/true);
+    // draco::GltfEncoder flips texture v itself; the fallback's hand-built Draco stream is read by glTF
+    // viewers as is, so it holds glTF's flipped v.
+    const auto dm = to_draco(m, who, /*linear_colors=*/true, /*flip_v=*/opt.fallback);
     if (opt.fallback) {
         const std::string glb = draco_glb_with_fallback(*dm, opt, who);
         write_buffer(path, "write_draco_glb", glb.data(), glb.size());
@@ -512,6 +518,7 @@ void write_draco_glb(const std::string& path, const Mesh& m, const DracoOptions&
     co.quantization_position.SetQuantizationBits(opt.position_bits);
     co.quantization_bits_normal = opt.normal_bits;
     co.quantization_bits_tex_coord = opt.texcoord_bits;
+    co.quantization_bits_color = kLinearColorBits;
     draco::Material* material = dm->GetMaterialLibrary().MutableMaterial(0);
     material->SetName("normalflow");
     material->SetColorFactor(draco::Vector4f(0.8f, 0.8f, 0.8f, 1.0f));

@@ -61,9 +61,13 @@ std::size_t attach_corner_attributes(Mesh& m, const std::vector<std::array<std::
         for (std::size_t c = 0; c < 3; ++c) {
             std::uint32_t& v = m.triangles[t][c];
             const auto key = key_of(corner_ref[3 * t + c]);
+            // an absent reference (-1) matches any; a vertex is copied only for a conflicting one
+            const auto agrees = [](std::int64_t a, std::int64_t b) { return a < 0 || b < 0 || a == b; };
             if (first[v][0] == -2) {
                 first[v] = key;
-            } else if (first[v] != key) {
+            } else if (agrees(first[v][0], key[0]) && agrees(first[v][1], key[1])) {
+                for (std::size_t k = 0; k < 2; ++k) first[v][k] = std::max(first[v][k], key[k]);
+            } else {
                 const auto [it, fresh] = copies.try_emplace({std::int64_t(v), key[0], key[1]}, std::uint32_t(first.size()));
                 if (fresh) {
                     m.positions.push_back(m.positions[v]);
@@ -106,6 +110,7 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
     std::vector<std::array<std::int64_t, 2>> poly_ref, corner_ref;  // per corner: vt, vn (0-based, -1 absent)
     bool any_ref[2] = {false, false};
     std::pair<std::int64_t, std::size_t> max_ref[2] = {{-1, 0}, {-1, 0}};  // largest positive reference, its line
+    std::string bad_ref[2];  // why the texture coordinates / normals are dropped, if they are
     std::size_t faces = 0, split = 0, unknown = 0, first_unknown_line = 0;
     std::string first_unknown;
     std::int64_t max_index = -1;  // largest 0-based index from a positive reference
@@ -217,9 +222,13 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                 for (int k = 0; k < 2; ++k) {
                     if (tn[k] == 0) continue;
                     ref[std::size_t(k)] = tn[k] < 0 ? std::int64_t(counts[k]) + tn[k] : tn[k] - 1;
-                    if (ref[std::size_t(k)] < 0)
-                        fail_line(kReader, name, line, std::string(k ? "normal" : "texture coordinate") + " index " +
-                                                           std::to_string(tn[k]) + " reaches before the first one");
+                    if (ref[std::size_t(k)] < 0) {
+                        if (bad_ref[k].empty())
+                            bad_ref[k] = (k ? "normal" : "texture coordinate") + std::string(" index ") +
+                                         std::to_string(tn[k]) + " at line " + std::to_string(line) +
+                                         " reaches before the first one";
+                        ref[std::size_t(k)] = -1;
+                    }
                     if (tn[k] > 0) max_ref[k] = std::max(max_ref[k], std::make_pair(ref[std::size_t(k)], line));
                     any_ref[k] = true;
                 }
@@ -248,23 +257,29 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
     if (faces == 0) fail(kReader, name, "no faces (" + std::to_string(m.positions.size()) + " vertices, no 'f' lines)");
     for (int k = 0; k < 2; ++k) {
         const std::size_t count = k ? normals.size() : texcoords.size();
-        if (max_ref[k].first >= std::int64_t(count))
-            fail_line(kReader, name, max_ref[k].second,
-                      std::string(k ? "normal" : "texture coordinate") + " index " +
-                          std::to_string(max_ref[k].first + 1) + " out of range (the file has " +
-                          std::to_string(count) + ")");
+        if (max_ref[k].first >= std::int64_t(count) && bad_ref[k].empty())
+            bad_ref[k] = (k ? "normal" : "texture coordinate") + std::string(" index ") +
+                         std::to_string(max_ref[k].first + 1) + " at line " + std::to_string(max_ref[k].second) +
+                         " is out of range (the file has " + std::to_string(count) + ")";
+        // The positions and faces are sound: a broken attribute reference drops that attribute, not the file.
+        if (!bad_ref[k].empty()) any_ref[k] = false;
     }
     if (!colors.empty()) m.colors = std::move(colors);
+    const std::size_t file_vertices = m.positions.size();
     const std::size_t split_vertices = attach_corner_attributes(m, corner_ref, any_ref[0] ? &texcoords : nullptr,
                                                                 any_ref[1] ? &normals : nullptr);
 
     if (info) {
         *info = ReadInfo{};
         info->format = "obj";
-        info->file_vertices = m.positions.size();
+        info->file_vertices = file_vertices;
         info->file_faces = faces;
         info->polygons_split = split;
         if (split) info->warnings.push_back(detail::split_warning(split));
+        for (int k = 0; k < 2; ++k)
+            if (!bad_ref[k].empty())
+                info->warnings.push_back(bad_ref[k] + "; the " + (k ? "normals" : "texture coordinates") +
+                                         " are ignored");
         if (split_vertices)
             info->warnings.push_back(std::to_string(split_vertices) +
                                      " vertices duplicated where their corners have different texture coordinates "

@@ -33,9 +33,9 @@ using TexCoord = std::array<float, 2>;
 struct Mesh {
     std::vector<Vec3f> positions;
     std::vector<Tri> triangles;
-    std::vector<Vec3f> normals;        ///< unit vertex normals (zero where undefined), or empty
-    std::vector<Rgba8> colors;         ///< vertex colours, or empty
-    std::vector<TexCoord> texcoords;   ///< vertex texture coordinates, or empty
+    std::vector<Vec3f> normals{};      ///< unit vertex normals (zero where undefined), or empty
+    std::vector<Rgba8> colors{};       ///< vertex colours, or empty
+    std::vector<TexCoord> texcoords{}; ///< vertex texture coordinates, or empty
 
     bool empty() const { return triangles.empty(); }
     bool has_normals() const { return !normals.empty(); }

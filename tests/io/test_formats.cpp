@@ -106,14 +106,27 @@ TEST(MeshFormatFromPath, ExtensionsCaseInsensitive) {
 TEST(ReadObj, QuadsWithEveryCornerForm) {
     ReadInfo info;
     const Mesh m = read_mesh(kFixtures + "/cube_quads.obj", &info);
-    EXPECT_EQ(m.positions, kCubeV);
-    EXPECT_EQ(m.triangles, kCubeT);
+    // The fixture's top face gives vertices 8 and 7 other texture coordinates than the bottom face
+    // did: each gets a copy, appended after the file's vertices, and that face uses the copies.
+    std::vector<Vec3f> v = kCubeV;
+    v.push_back(kCubeV[7]);
+    v.push_back(kCubeV[6]);
+    EXPECT_EQ(m.positions, v);
+    std::vector<Tri> t = kCubeT;
+    t[6] = {2, 3, 8};
+    t[7] = {2, 8, 9};
+    EXPECT_EQ(m.triangles, t);
+    const std::vector<TexCoord> vt = {{0, 0}, {0, 0}, {1, 1}, {0, 1}, {0, 0}, {1, 0}, {1, 1}, {0, 1}, {0, 0}, {1, 0}};
+    EXPECT_EQ(m.texcoords, vt);
+    EXPECT_FALSE(m.has_normals());  // its vn references are out of range: dropped, the file is still read
     EXPECT_EQ(info.format, "obj");
     EXPECT_EQ(info.file_vertices, 8u);
     EXPECT_EQ(info.file_faces, 6u);
     EXPECT_EQ(info.polygons_split, 6u);
-    ASSERT_EQ(info.warnings.size(), 1u);
+    ASSERT_EQ(info.warnings.size(), 3u);
     EXPECT_NE(info.warnings[0].find("6 faces had more than 3 corners"), std::string::npos) << info.warnings[0];
+    EXPECT_EQ(info.warnings[1], "normal index 5 at line 23 is out of range (the file has 2); the normals are ignored");
+    EXPECT_EQ(info.warnings[2], "2 vertices duplicated where their corners have different texture coordinates or normals");
 }
 
 TEST(ReadObj, NegativeIndicesCountBackFromTheLastVertexRead) {
