@@ -1,8 +1,10 @@
-// normalflow compress IN OUT.(drc|glb) [--position-bits 14] [--normal-bits 10] [--level 7] [--fallback]
+// normalflow compress IN OUT.(drc|glb) [--position-bits 14] [--normal-bits 10] [--texcoord-bits 12] [--level 7]
+//                     [--fallback]
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <tuple>
 
 #include "commands.h"
 #include "core/errors.h"
@@ -31,21 +33,34 @@ int run_compress(const CompressArgs& a) {
     const double t_write = clock.lap();
     const auto in_bytes = std::filesystem::file_size(a.input);
     const auto out_bytes = std::filesystem::file_size(a.output);
-    // Raw size: float32 positions + uint32 indices.
-    const std::size_t raw = m.positions.size() * 12 + m.triangles.size() * 12;
+    // Raw size: float32 positions, normals and texture coordinates, 8-bit RGBA colours, uint32 indices.
+    const std::size_t raw = m.positions.size() * 12 + m.normals.size() * 12 + m.colors.size() * 4 +
+                            m.texcoords.size() * 8 + m.triangles.size() * 12;
+    std::string attributes;  // "normals, colours" for the text line
+    Json listed = Json::array();
+    for (const auto& [has, name, word] : {std::tuple{m.has_normals(), "normals", "normals"},
+                                          std::tuple{m.has_colors(), "colors", "colours"},
+                                          std::tuple{m.has_texcoords(), "texcoords", "texture coordinates"}})
+        if (has) {
+            listed.push(name);
+            attributes += (attributes.empty() ? "" : ", ") + std::string(word);
+        }
     if (a.out.json) {
         Json j = Json::object();
         j.set("command", "compress").set("input", a.input).set("output", a.output)
             .set("vertices", m.positions.size()).set("triangles", m.triangles.size())
             .set("bytes_before", static_cast<std::size_t>(in_bytes)).set("bytes_raw", raw)
             .set("bytes_after", static_cast<std::size_t>(out_bytes))
-            .set("position_bits", a.draco.position_bits).set("compression_level", a.draco.compression_level)
+            .set("attributes", listed).set("position_bits", a.draco.position_bits)
+            .set("normal_bits", a.draco.normal_bits).set("texcoord_bits", a.draco.texcoord_bits)
+            .set("compression_level", a.draco.compression_level)
             .set("seconds_read", t_read).set("seconds_compress", t_write);
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {
-        std::printf("compress: %s (%zu bytes) -> %s (%zu bytes, %.1fx; raw %zu bytes) in %.3f s\n", a.input.c_str(),
-                    static_cast<std::size_t>(in_bytes), a.output.c_str(), static_cast<std::size_t>(out_bytes),
-                    out_bytes ? double(in_bytes) / double(out_bytes) : 0.0, raw, t_write);
+        std::printf("compress: %s (%zu bytes) -> %s (%zu bytes, %.1fx; raw %zu bytes%s%s) in %.3f s\n",
+                    a.input.c_str(), static_cast<std::size_t>(in_bytes), a.output.c_str(),
+                    static_cast<std::size_t>(out_bytes), out_bytes ? double(in_bytes) / double(out_bytes) : 0.0, raw,
+                    attributes.empty() ? "" : "; with ", attributes.c_str(), t_write);
     }
     return 0;
 }
@@ -56,6 +71,8 @@ void add_draco_options(CLI::App* cmd, DracoOptions& d) {
     cmd->add_option("--position-bits", d.position_bits, "quantization bits per position axis")
         ->check(CLI::Range(1, 30))->capture_default_str();
     cmd->add_option("--normal-bits", d.normal_bits, "quantization bits per normal component")
+        ->check(CLI::Range(1, 30))->capture_default_str();
+    cmd->add_option("--texcoord-bits", d.texcoord_bits, "quantization bits per texture coordinate component")
         ->check(CLI::Range(1, 30))->capture_default_str();
     cmd->add_option("--level", d.compression_level, "compression level 0 (fast) .. 10 (small)")
         ->check(CLI::Range(0, 10))->capture_default_str();

@@ -117,6 +117,10 @@ std::size_t count_self_intersections(const Mesh& mesh) {
 RepairReport repair_mesh(Mesh& m, const RepairOptions& opt) {
     check_mesh(m, "repair_mesh");
     RepairReport rep;
+    if (m.has_attributes()) {
+        m.clear_attributes();
+        rep.warnings.push_back("normals, colours and texture coordinates dropped: repair renumbers the vertices");
+    }
 
     std::vector<Point> pts;
     pts.reserve(m.positions.size());

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "extract/surface_attributes.h"
 #include "core/mesh_report.h"
 
 namespace normalflow {
@@ -82,6 +83,7 @@ HalfEdgeMesh to_openmesh(const Mesh& m, const char* who) {
 /// OpenMesh -> Mesh (the io boundary): the input's triangles, positions from the welded points.
 void write_back(const HalfEdgeMesh& h, Mesh& m) {
     for (std::size_t k = 0; k < m.positions.size(); ++k) m.positions[k] = Vec3f(h.points[h.old_to_new[k]]);
+    if (m.has_normals()) set_face_normals(m);  // the input's normals belong to the old positions
 }
 
 /// One-ring neighbourhoods with weights, as flat arrays.

@@ -13,7 +13,9 @@
 ///    SmoothingReport::faces_skipped and a warning is added. Their corners still move if other faces
 ///    use them.
 ///  - Output: the same Mesh, modified in place: the triangles are unchanged, only positions move;
-///    every copy of a welded point moves the same way; unreferenced points stay put.
+///    every copy of a welded point moves the same way; unreferenced points stay put. Colours and
+///    texture coordinates stay; normals, when the mesh has them, are recomputed from the moved faces
+///    (set_face_normals).
 ///  - Boundary vertices (on an edge with one face) stay fixed unless the options say otherwise.
 ///  - Deterministic: every iteration reads one position buffer and writes another (TBB
 ///    parallel_for over vertices), so the result does not depend on the number of threads.

@@ -9,6 +9,7 @@
 
 #include "core/errors.h"
 #include "core/stopwatch.h"
+#include "extract/surface_attributes.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/memory_estimate.h"
 #ifdef NORMALFLOW_HAS_CGAL
@@ -150,7 +151,8 @@ Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, Pipelin
     if (o.repair) {
 #ifdef NORMALFLOW_HAS_CGAL
         detail::begin(progress, "repair");
-        repaired = input;
+        repaired.positions = input.positions;  // scan conversion needs the geometry only
+        repaired.triangles = input.triangles;
         r.repair = repair_mesh(repaired);
         r.repaired = true;
         mesh = &repaired;
@@ -208,6 +210,7 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
         r.seconds.decimate = clock.lap();
     }
 #endif
+    set_volume_normals(m, v);  // the processed surface's own normals: viewers shade it smooth
     r.seconds.total += r.seconds.extract + r.seconds.decimate;
     r.peak_memory_bytes = peak_memory_bytes();
     return m;
@@ -258,12 +261,17 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
                       (o.connectivity == Connectivity::Auto && o.target_faces == 0 && has_open_boundary(m));
     if (!keep) {
         result.mesh = volume_to_mesh(v, o, &r, progress);
+        if (m.has_colors()) transfer_colors(result.mesh, m, *make_bvh_query(m));
+        if (m.has_texcoords())
+            r.warnings.push_back("texture coordinates dropped: re-meshing makes new vertices "
+                                 "(--connectivity keep keeps them)");
         return result;
     }
     Stopwatch clock;
     detail::begin(progress, "fit");
     result.mesh = m;
     r.fit = fit_mesh_to_volume(result.mesh, v, o.fit);
+    set_volume_normals(result.mesh, v);  // replaces the input's normals, which belong to the noisy surface
     r.connectivity_kept = true;
     if (r.fit.outside_band > 0)
         r.warnings.push_back(std::to_string(r.fit.outside_band) +

@@ -142,6 +142,9 @@ struct PipelineResult {
 /// scan.shell_thickness). The re-meshed result is closed and manifold (before decimation by
 /// construction); with options.connectivity Keep (Auto: for an open input) it is m itself with its
 /// vertices moved (fit_mesh_to_volume), as open as m was.
+/// Attributes: the result has vertex normals from the processed volume (set_volume_normals). Kept
+/// connectivity keeps m's colours and texture coordinates; re-meshing takes m's colours by closest
+/// point (transfer_colors) and drops its texture coordinates, with a warning.
 /// \throw InvalidInput for bad options (the message names the field, e.g. "smooth.mu"), a mesh
 ///        scan_convert refuses, or a surface that vanished during smoothing;
 ///        OutOfMemory when the estimated peak exceeds the limit (check_memory);
@@ -156,8 +159,9 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& options = {}, P
 Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                       Progress* progress = nullptr);
 
-/// The second half of smooth_mesh: extraction and, with options.target_faces > 0, decimation.
-/// options.smoothing only selects the message when the volume holds no surface.
+/// The second half of smooth_mesh: extraction and, with options.target_faces > 0, decimation; the
+/// result has vertex normals from v (set_volume_normals). options.smoothing only selects the message
+/// when the volume holds no surface.
 /// \throw InvalidInput if the volume holds no surface.
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                     Progress* progress = nullptr);

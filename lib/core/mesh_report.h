@@ -81,7 +81,8 @@ MeshReport mesh_report(const Mesh& m);
 
 /// Merges positions with identical coordinates (+0 == -0). The result keeps the first occurrence of
 /// each point, in the original order, and remaps the faces (no face is removed, so faces may become
-/// degenerate). If old_to_new is given it receives the new index of every old position.
+/// degenerate). If old_to_new is given it receives the new index of every old position. The result has
+/// no attributes (normals, colours and texture coordinates are dropped).
 /// \throw InvalidInput if a face index is out of range or a position is not finite.
 Mesh weld_exact(const Mesh& m, std::vector<std::uint32_t>* old_to_new = nullptr);
 

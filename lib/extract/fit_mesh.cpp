@@ -12,52 +12,11 @@
 #include <tbb/parallel_for.h>
 
 #include "core/errors.h"
+#include "extract/volume_sampler.h"
 
 namespace normalflow {
 
 namespace {
-
-/// φ and ∇φ of a volume at any world position: trilinear interpolation of the samples and of their
-/// central differences (so ∇φ is continuous across cells).
-class Sampler {
-public:
-    explicit Sampler(const Volume& v) : v_(v), h_(v.grid.voxel_size) {}
-
-    /// φ at p (world units); grad, when given, ∇φ there.
-    double phi(const Vec3d& p, Vec3d* grad) const {
-        const Vec3d g = v_.grid.index(p);
-        const int i = int(std::floor(g.x)), j = int(std::floor(g.y)), k = int(std::floor(g.z));
-        const double fx = g.x - i, fy = g.y - j, fz = g.z - k;
-        double value = 0.0;
-        Vec3d gradient(0, 0, 0);
-        for (int c = 0; c < 8; ++c) {
-            const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
-            const double w = (dx ? fx : 1 - fx) * (dy ? fy : 1 - fy) * (dz ? fz : 1 - fz);
-            const int a = i + dx, b = j + dy, d = k + dz;
-            value += w * v_.value(a, b, d);
-            if (grad)
-                gradient = gradient + Vec3d(v_.value(a + 1, b, d) - v_.value(a - 1, b, d),
-                                            v_.value(a, b + 1, d) - v_.value(a, b - 1, d),
-                                            v_.value(a, b, d + 1) - v_.value(a, b, d - 1)) *
-                                          (w / (2 * h_));
-        }
-        if (grad) *grad = gradient;
-        return value;
-    }
-
-    /// Whether φ at p is the background (the sample cell has a corner outside the band).
-    bool outside_band(const Vec3d& p) const {
-        const Vec3d g = v_.grid.index(p);
-        const int i = int(std::floor(g.x)), j = int(std::floor(g.y)), k = int(std::floor(g.z));
-        for (int c = 0; c < 8; ++c)
-            if (std::abs(v_.value(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))) >= v_.background) return true;
-        return false;
-    }
-
-private:
-    const Volume& v_;
-    double h_;
-};
 
 struct PositionHash {
     std::size_t operator()(const Vec3f& p) const {
@@ -182,7 +141,7 @@ FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o) {
         }
     }
 
-    const Sampler S(v);
+    const detail::VolumeSampler S(v);
     const double h = v.grid.voxel_size;
     std::vector<char> outside(n, 0);
     // Newton steps from p toward the zero level set, each at most a voxel long

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/errors.h"
+#include "extract/surface_attributes.h"
 #include "core/mesh_report.h"
 
 namespace normalflow {
@@ -143,6 +144,7 @@ NoiseReport add_noise(Mesh& m, const NoiseOptions& opt) {
         const std::uint32_t v = old_to_new[k];
         if (referenced[v]) m.positions[k] = Vec3f(Vec3d(w.positions[v]) + disp[v]);
     }
+    if (m.has_normals()) set_face_normals(m);  // the normals of the noisy surface, not of the clean one
     return r;
 }
 

@@ -57,6 +57,7 @@ struct NoiseReport {
 /// vertex whose faces have zero total area gets a random direction in Normal mode.
 /// \throw InvalidInput for a mesh without triangles, out-of-range indices, non-finite positions,
 ///        sigma < 0 or a fraction outside [0, 1].
+/// Colours and texture coordinates stay; normals, when m has them, are recomputed from the noisy faces.
 /// Cost: O(V log V + F log F), single-threaded (the random stream is sequential).
 NoiseReport add_noise(Mesh& m, const NoiseOptions& opt = {});
 

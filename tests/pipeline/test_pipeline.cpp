@@ -16,6 +16,7 @@
 #include "io/io.h"
 #include "io/pipeline/report_json.h"
 #include "sdf/sdf_test_meshes.h"
+#include "support/attributed_mesh.h"
 #include "support/test_files.h"
 
 namespace normalflow {
@@ -294,6 +295,57 @@ TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
     EXPECT_NE(msg.find("target_faces"), std::string::npos) << msg;
 }
 
+TEST(Pipeline, AttributesKeptTransferredOrDroppedAsDocumented) {
+    PipelineOptions o = quick_options();
+    const Mesh in = test::attributed_sphere(3);
+    double radial = 0;
+    const auto worst_radial = [&](const Mesh& m) {
+        radial = 0;
+        for (std::size_t i = 0; i < m.positions.size(); ++i) {
+            const Vec3d p(m.positions[i]), n(m.normals[i]);
+            radial = std::max(radial, std::atan2(norm(cross(p, n)), dot(p, n)) * 180 / 3.141592653589793);
+        }
+        return radial;
+    };
+    // kept connectivity: colours and texture coordinates as they were, normals of the processed sphere
+    o.connectivity = Connectivity::Keep;
+    const PipelineResult kept = smooth_mesh(in, o);
+    EXPECT_EQ(kept.mesh.colors, in.colors);
+    EXPECT_EQ(kept.mesh.texcoords, in.texcoords);
+    ASSERT_EQ(kept.mesh.normals.size(), in.positions.size());
+    EXPECT_NE(kept.mesh.normals, in.normals);  // recomputed, not copied
+    EXPECT_LT(worst_radial(kept.mesh), 3.0);
+    // re-meshed: normals from the volume, colours by closest point, texture coordinates dropped (said)
+    o.connectivity = Connectivity::Remesh;
+    const PipelineResult re = smooth_mesh(in, o);
+    ASSERT_EQ(re.mesh.normals.size(), re.mesh.positions.size());
+    ASSERT_EQ(re.mesh.colors.size(), re.mesh.positions.size());
+    EXPECT_FALSE(re.mesh.has_texcoords());
+    EXPECT_LT(worst_radial(re.mesh), 3.0);
+    const auto has = [](const std::vector<std::string>& w, const std::string& s) {
+        return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.find(s) != std::string::npos; });
+    };
+    EXPECT_TRUE(has(re.report.warnings, "texture coordinates dropped")) << re.report.warnings.size();
+    EXPECT_FALSE(has(kept.report.warnings, "texture coordinates dropped"));
+    // the colours follow the input's: a red ramp along x comes back on the new vertices, up to the
+    // smoothing's displacement of the surface and the blend over the input's triangles
+    Mesh ramp = in;
+    for (std::size_t i = 0; i < ramp.positions.size(); ++i)
+        ramp.colors[i][0] = std::uint8_t(std::lround(127.5 * (ramp.positions[i].x + 1)));
+    const PipelineResult ramped = smooth_mesh(ramp, o);
+    double worst = 0;
+    for (std::size_t j = 0; j < ramped.mesh.positions.size(); ++j) {
+        const Vec3d p(ramped.mesh.positions[j]);
+        worst = std::max(worst, std::abs(double(ramped.mesh.colors[j][0]) - 127.5 * (p.x / norm(p) + 1)));
+    }
+    EXPECT_LT(worst, 6.0);
+    // a mesh without attributes gets normals only
+    const PipelineResult bare = smooth_mesh(test::icosphere(1.0, 3), o);
+    EXPECT_TRUE(bare.mesh.has_normals());
+    EXPECT_FALSE(bare.mesh.has_colors());
+    EXPECT_FALSE(bare.mesh.has_texcoords());
+}
+
 TEST(Pipeline, EmptyVolumeMessages) {
     Grid g;
     g.voxel_size = 0.1;
@@ -335,6 +387,34 @@ TEST(Pipeline, CliSmoothEqualsLibrary) {
     ASSERT_EQ(cli.positions.size(), lib.positions.size());
     EXPECT_EQ(cli.positions, lib.positions);
     EXPECT_EQ(cli.triangles, lib.triangles);
+}
+TEST(Pipeline, CliTexturedInputKeepsItsAttributesThroughSmoothAndCompress) {
+    test::TempDir dir;
+    Mesh in = test::attributed_sphere(3);
+    for (Rgba8& c : in.colors) c[3] = 255;  // OBJ colours have no alpha
+    const std::string obj = dir / "in.obj", out = dir / "out.obj";
+    write_mesh(obj, in);
+    const std::string cli = NORMALFLOW_TEST_CLI;
+    const std::string smooth = cli + " smooth " + obj + " " + out +
+                               " --resolution 32 --iterations 3 --normal-steps 8 --connectivity keep --quiet";
+    ASSERT_EQ(std::system(smooth.c_str()), 0) << smooth;
+    const Mesh smoothed = read_mesh(out);
+    EXPECT_EQ(smoothed.triangles, in.triangles);
+    EXPECT_EQ(smoothed.colors, in.colors);
+    EXPECT_EQ(smoothed.texcoords, in.texcoords);
+    ASSERT_TRUE(smoothed.has_normals());
+    for (const std::string ext : {".glb", ".drc"}) {
+        SCOPED_TRACE(ext);
+        const std::string packed = dir / ("out" + ext);
+        const std::string compress = cli + " compress " + out + " " + packed + " --normal-bits 12 --quiet";
+        ASSERT_EQ(std::system(compress.c_str()), 0) << compress;
+        const Mesh back = read_mesh(packed);
+        ASSERT_EQ(back.triangles.size(), in.triangles.size());
+        const test::AttributeErrors e = test::attribute_errors(smoothed, back, 1e-3);
+        EXPECT_LT(e.normal_deg, 0.2);
+        EXPECT_EQ(e.color, 0.0);
+        EXPECT_LT(e.texcoord, 1e-3);
+    }
 }
 #endif
 
