@@ -55,7 +55,30 @@ Mesh extract_surface(const Volume& v, const ExtractOptions& opt, ExtractReport* 
     const Grid& g = v.grid;
     const float iso = float(opt.iso);
     const Keyer keyer{std::uint64_t(g.dims[0]) + 2, std::uint64_t(g.dims[1]) + 2};
-    const std::size_t nb = v.block_count();
+    const std::size_t allocated = v.block_count();
+    // Inside tiles (unallocated, -background) next to an outside tile or to the grid's exterior: the level
+    // set also passes between such blocks, where no allocated block sees it (an open input's closed volume
+    // does this: its inside can reach the border). They are visited after the allocated blocks.
+    std::vector<std::array<int, 3>> tiles;
+    std::vector<char> is_tile_visited(v.block_table.size(), 0);
+    for (int bk = 0; bk < v.block_dims[2]; ++bk)
+        for (int bj = 0; bj < v.block_dims[1]; ++bj)
+            for (int bi = 0; bi < v.block_dims[0]; ++bi) {
+                const std::size_t t = v.table_index(bi, bj, bk);
+                if (v.block_table[t] != kBlockInside) continue;
+                bool borders = (bi + 1) * kBlockDim >= g.dims[0] || (bj + 1) * kBlockDim >= g.dims[1] ||
+                               (bk + 1) * kBlockDim >= g.dims[2];
+                for (int n = 0; n < 27 && !borders; ++n) {
+                    const int ni = bi + n % 3 - 1, nj = bj + n / 3 % 3 - 1, nk = bk + n / 9 - 1;
+                    borders = ni < 0 || nj < 0 || nk < 0 || ni >= v.block_dims[0] || nj >= v.block_dims[1] ||
+                              nk >= v.block_dims[2] || v.block_table[v.table_index(ni, nj, nk)] == kBlockOutside;
+                }
+                if (borders) {
+                    tiles.push_back({bi, bj, bk});
+                    is_tile_visited[t] = 1;
+                }
+            }
+    const std::size_t nb = allocated + tiles.size();
     std::vector<BlockOut> outs(nb);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 8), [&](const auto& range) {
@@ -63,7 +86,8 @@ Mesh extract_surface(const Volume& v, const ExtractOptions& opt, ExtractReport* 
         constexpr int C = kBlockDim + 2;
         float cache[C * C * C];
         for (std::size_t slot = range.begin(); slot != range.end(); ++slot) {
-            const auto& b = v.block_coords[slot];
+            const bool tile = slot >= allocated;
+            const auto& b = tile ? tiles[slot - allocated] : v.block_coords[slot];
             const std::size_t self = v.table_index(b[0], b[1], b[2]);
             const int x0 = b[0] * kBlockDim - 1, y0 = b[1] * kBlockDim - 1, z0 = b[2] * kBlockDim - 1;
             for (int k = 0; k < C; ++k)
@@ -82,18 +106,25 @@ Mesh extract_surface(const Volume& v, const ExtractOptions& opt, ExtractReport* 
                             inside |= (val[q] < 0 ? 1 : 0) << q;
                         }
                         if (inside == 0 || inside == 255) continue;
-                        // Border cubes: visited by the first allocated block (in table order) holding a corner.
+                        // Border cubes: visited by the first allocated block (in table order) holding a corner,
+                        // or, when no allocated block holds one, by the first visited tile.
                         if (li == 0 || lj == 0 || lk == 0 || li == C - 2 || lj == C - 2 || lk == C - 2) {
                             std::size_t owner = self;
+                            bool allocated_corner = false;
                             for (int q = 0; q < 8; ++q) {
                                 const int ci = c[0] + (q & 1), cj = c[1] + (q >> 1 & 1), ck = c[2] + (q >> 2 & 1);
                                 if (ci < 0 || cj < 0 || ck < 0) continue;
                                 const int bi = ci >> kBlockLog2, bj = cj >> kBlockLog2, bk = ck >> kBlockLog2;
                                 if (bi >= v.block_dims[0] || bj >= v.block_dims[1] || bk >= v.block_dims[2]) continue;
                                 const std::size_t t = v.table_index(bi, bj, bk);
-                                if (t < owner && v.block_table[t] >= 0) owner = t;
+                                if (v.block_table[t] >= 0) {
+                                    if (!allocated_corner || t < owner) owner = t;
+                                    allocated_corner = true;
+                                } else if (tile && !allocated_corner && is_tile_visited[t] && t < owner) {
+                                    owner = t;
+                                }
                             }
-                            if (owner != self) continue;
+                            if (owner != self || (tile && allocated_corner)) continue;
                         }
                         for (const auto& tet : kTets) {
                             int mask = 0;

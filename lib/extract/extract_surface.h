@@ -38,8 +38,10 @@ struct ExtractReport {
 /// Sliver triangles are kept (none has zero area up to rounding of float positions).
 ///
 /// Accepted input: any Volume whose invariant holds (every sample with |phi| < half_width · h lies
-/// in an allocated block); only cubes with a corner in an allocated block are visited, so two
-/// unallocated neighbour blocks with opposite tile signs (a broken invariant) would leave a hole.
+/// in an allocated block). Cubes with a corner in an allocated block are visited, and so are the cubes
+/// of inside tiles that touch an outside tile or the grid's border: the surface also passes there when
+/// a volume's inside reaches the border or an inside tile meets an outside one (the closed volume of
+/// an open mesh), and it stays closed.
 /// An empty volume gives an empty mesh. Genus and components are whatever the level set has.
 ///
 /// \throw InvalidInput if iso is not finite or |iso| >= v.background, or v breaks its invariants

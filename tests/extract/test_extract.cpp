@@ -129,6 +129,39 @@ TEST(Extract, IdenticalForOneAndTwoThreads) {
     EXPECT_EQ(ma.triangles, mb.triangles);
 }
 
+TEST(Extract, InsideTilesAtTheBorderOrNextToOutsideTilesGiveAClosedSurface) {
+    // No allocated block at all: one inside tile in the grid's corner (its inside reaches the border, as
+    // an open scan's closed volume does) and one in the middle surrounded by outside tiles. Each is a
+    // cube whose surface runs half way between its samples and the neighbours' (or the exterior's).
+    Grid g;
+    g.dims = {32, 32, 32};
+    g.voxel_size = 1.0;
+    for (const bool with_band : {false, true}) {
+        SCOPED_TRACE(with_band ? "next to an allocated block" : "tiles only");
+        Volume v(g, 3.0f);
+        v.block_table[v.table_index(0, 0, 0)] = kBlockInside;
+        v.block_table[v.table_index(2, 2, 2)] = kBlockInside;
+        if (with_band) {
+            // an allocated block next to the middle tile, all outside: the cubes they share are visited
+            // once, by the allocated block
+            const std::int32_t s = v.allocate_block(3, 2, 2);
+            std::fill_n(v.block_values(s), kBlockVoxels, v.background);
+        }
+        ExtractReport rep;
+        const Mesh m = extract_surface(v, {}, &rep);
+        const MeshReport r = mesh_report(m);
+        EXPECT_TRUE(r.closed) << r.boundary_edges << " boundary edges";
+        EXPECT_TRUE(r.manifold);
+        EXPECT_EQ(r.components, 2u);
+        EXPECT_EQ(r.duplicate_faces, 0u);
+        // the corner cube spans samples -0.5 .. 7.5 (the exterior at -1 is outside), the middle one
+        // 15.5 .. 23.5 (the level set is half way between ±background): 8^3 each, less the chamfers the
+        // tetrahedra cut along the 12 edges, each at most a right triangle with legs 1/2 along 8 units
+        EXPECT_LT(r.volume, 2 * 512.0);
+        EXPECT_GT(r.volume, 2 * (512.0 - 12 * 8 * 0.125));
+    }
+}
+
 TEST(Extract, EmptyVolumeAndBadIso) {
     Grid g;
     g.dims = {10, 10, 10};
