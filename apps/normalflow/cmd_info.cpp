@@ -79,7 +79,7 @@ int run_info(const InfoArgs& a) {
     std::printf("  vertices         %zu unique positions\n", r.vertices);
     std::printf("  triangles        %zu\n", r.faces);
     std::printf("  components       %zu\n", r.components);
-    std::printf("  boundary edges   %zu\n", r.boundary_edges);
+    std::printf("  boundary edges   %zu (%zu loops)\n", r.boundary_edges, r.boundary_loops);
     std::printf("  non-manifold     %zu edges, %zu vertices\n", r.non_manifold_edges, r.non_manifold_vertices);
     std::printf("  degenerate       %zu faces\n", r.degenerate_faces);
     std::printf("  duplicate        %zu faces\n", r.duplicate_faces);

@@ -299,8 +299,12 @@ void add_smooth_command(CLI::App& app) {
     const std::map<std::string, Connectivity> connectivity = {
         {"auto", Connectivity::Auto}, {"keep", Connectivity::Keep}, {"remesh", Connectivity::Remesh}};
     add_enum_option(cmd, "--connectivity", a->pipeline.connectivity, connectivity,
-                    "keep: the input's own mesh, its vertices moved onto the result; remesh: a new closed mesh "
-                    "extracted from it; auto (default): keep for an open input, remesh for a closed one");
+                    "keep: the input's own mesh, its vertices moved onto the result; remesh: a new mesh "
+                    "extracted from it (open where the input is open, see --closed); auto (default): keep for an "
+                    "open input, remesh for a closed one");
+    cmd->add_flag("--closed", a->pipeline.closed,
+                  "re-mesh an open input as a closed, watertight surface (3D printing, tetrahedra) instead of "
+                  "trimming it to the input's footprint");
     cmd->add_option("--relax-steps", a->pipeline.fit.relax_steps,
                     "keep: tangential relaxation iterations (untangle what noise moved along the surface)")
         ->check(CLI::Range(0, 100000))->capture_default_str();

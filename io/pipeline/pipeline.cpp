@@ -79,6 +79,8 @@ void validate(const PipelineOptions& o) {
     if (!std::isfinite(o.extract.iso)) bad_option("extract.iso", str(o.extract.iso), "a finite value");
     if (o.connectivity == Connectivity::Keep && o.target_faces > 0)
         throw InvalidInput("smooth_mesh: target_faces (--target-faces) re-meshes: it needs connectivity remesh or auto");
+    if (o.connectivity == Connectivity::Keep && o.closed)
+        throw InvalidInput("smooth_mesh: closed (--closed) re-meshes: it needs connectivity remesh or auto");
     if (o.fit.projection_steps < 0) bad_option("fit.projection_steps", str(o.fit.projection_steps), ">= 0");
     if (o.fit.relax_steps < 0) bad_option("fit.relax_steps", str(o.fit.relax_steps), ">= 0");
     if (o.fit.vertex_steps < 0) bad_option("fit.vertex_steps", str(o.fit.vertex_steps), ">= 0");
@@ -257,11 +259,27 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.seconds.smooth = clock.lap();
         r.seconds.total += r.seconds.smooth;
     }
+    const bool open = has_open_boundary(m);
     const bool keep = o.connectivity == Connectivity::Keep ||
-                      (o.connectivity == Connectivity::Auto && o.target_faces == 0 && has_open_boundary(m));
+                      (o.connectivity == Connectivity::Auto && o.target_faces == 0 && !o.closed && open);
     if (!keep) {
         result.mesh = volume_to_mesh(v, o, &r, progress);
-        if (m.has_colors()) transfer_colors(result.mesh, m, *make_bvh_query(m));
+        std::unique_ptr<ClosestTriangleQuery> q;
+        if (open && !o.closed) {
+            Stopwatch trim_clock;
+            q = make_bvh_query(m);
+            // the cap lies away from the input; the smoothed surface within its noise (a fraction of an edge)
+            const double h = v.grid.voxel_size;
+            r.trim = trim_to_footprint(result.mesh, m, *q, h, 3 * std::max(h, model_length_scale(m)));
+            r.trimmed = true;
+            if (result.mesh.empty())
+                throw InvalidInput("nothing of the surface is left after trimming it to the open input's footprint; "
+                                   "--closed keeps the closed surface");
+            const double seconds = trim_clock.lap();  // counted with the extraction
+            r.seconds.extract += seconds;
+            r.seconds.total += seconds;
+        }
+        if (m.has_colors()) transfer_colors(result.mesh, m, q ? *q : *(q = make_bvh_query(m)));
         if (m.has_texcoords())
             r.warnings.push_back("texture coordinates dropped: re-meshing makes new vertices "
                                  "(--connectivity keep keeps them)");

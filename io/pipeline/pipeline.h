@@ -14,6 +14,7 @@
 #include "core/volume.h"
 #include "extract/extract_surface.h"
 #include "extract/fit_mesh.h"
+#include "extract/trim_to_footprint.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #include "io/pipeline/system_memory.h"
@@ -82,6 +83,10 @@ struct PipelineOptions {
     /// Auto keeps an open input's (the volume closes it; an extraction would be a closed blob with the
     /// cap) and re-meshes a closed one. Keep refuses target_faces.
     Connectivity connectivity = Connectivity::Auto;
+    /// An open input re-meshed comes back open: the cap that closed its volume is trimmed off
+    /// (trim_to_footprint). closed = true keeps the closed, watertight surface instead (3D printing,
+    /// tetrahedra); with Auto it re-meshes an open input; Keep refuses it.
+    bool closed = false;
     /// The fit of the input's mesh (Connectivity::Keep).
     FitOptions fit;
     /// Extraction of the zero level set.
@@ -118,6 +123,8 @@ struct PipelineReport {
     ExtractReport extract;       ///< valid when !connectivity_kept
     bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
     FitReport fit;               ///< valid when connectivity_kept
+    bool trimmed = false;        ///< an open input's re-meshed result was trimmed to its footprint
+    TrimReport trim;             ///< valid when trimmed
     bool decimated = false;      ///< decimation ran (target_faces > 0)
     cgal::CleanupReport decimate;  ///< valid when decimated
     PipelineSeconds seconds;
@@ -141,7 +148,8 @@ struct PipelineResult {
 /// Accepted input: what scan_convert accepts (any triangle soup; open sheets need
 /// scan.shell_thickness). The re-meshed result is closed and manifold (before decimation by
 /// construction); with options.connectivity Keep (Auto: for an open input) it is m itself with its
-/// vertices moved (fit_mesh_to_volume), as open as m was.
+/// vertices moved (fit_mesh_to_volume), as open as m was. An open input re-meshed is trimmed to its
+/// footprint (trim_to_footprint), unless options.closed.
 /// Attributes: the result has vertex normals from the processed volume (set_volume_normals). Kept
 /// connectivity keeps m's colours and texture coordinates; re-meshing takes m's colours by closest
 /// point (transfer_colors) and drops its texture coordinates, with a warning.

@@ -90,6 +90,7 @@ Json to_json(const MeshReport& r) {
     j.set("vertices", r.vertices).set("input_vertices", r.input_vertices)
         .set("referenced_vertices", r.referenced_vertices).set("triangles", r.faces).set("edges", r.edges)
         .set("components", r.components).set("boundary_edges", r.boundary_edges)
+        .set("boundary_loops", r.boundary_loops)
         .set("non_manifold_edges", r.non_manifold_edges).set("non_manifold_vertices", r.non_manifold_vertices)
         .set("degenerate_faces", r.degenerate_faces).set("collapsed_faces", r.collapsed_faces)
         .set("duplicate_faces", r.duplicate_faces).set("inconsistent_edges", r.inconsistent_edges)
@@ -118,6 +119,11 @@ Json to_json(const PipelineReport& r) {
         j.set("fit", f);
     } else {
         j.set("extract", to_json(r.extract));
+    }
+    if (r.trimmed) {
+        Json t = Json::object();
+        t.set("faces_removed", r.trim.faces_removed).set("components_removed", r.trim.components_removed);
+        j.set("trim", t);
     }
     if (r.decimated) j.set("decimate", to_json(r.decimate));
     Json s = Json::object();

@@ -173,6 +173,8 @@ MeshReport mesh_report(const Mesh& m) {
         return 3 * f;  // unreachable for non-collapsed faces
     };
     detail::UnionFind<std::uint32_t> comps(nv);
+    detail::UnionFind<std::uint32_t> loops(nv);  // over boundary edges only
+    std::vector<char> on_boundary(nv, 0);
     for (std::size_t i = 0; i < he.size();) {
         std::size_t j = i;
         while (j < he.size() && he[j].key == he[i].key) ++j;
@@ -180,7 +182,11 @@ MeshReport mesh_report(const Mesh& m) {
         ++r.edges;
         const auto a = static_cast<std::uint32_t>(he[i].key >> 32), b = static_cast<std::uint32_t>(he[i].key);
         comps.unite(a, b);
-        if (count == 1) ++r.boundary_edges;
+        if (count == 1) {
+            ++r.boundary_edges;
+            loops.unite(a, b);
+            on_boundary[a] = on_boundary[b] = 1;
+        }
         if (count > 2) ++r.non_manifold_edges;
         if (count == 2 && he[i].reversed == he[i + 1].reversed) ++r.inconsistent_edges;
         std::uint32_t first = UINT32_MAX;
@@ -219,6 +225,9 @@ MeshReport mesh_report(const Mesh& m) {
     // Components: vertex-connectivity over the faces' edges, counted on referenced vertices.
     for (std::size_t v = 0; v < nv; ++v)
         if (referenced[v] && comps.find(static_cast<std::uint32_t>(v)) == v) ++r.components;
+
+    for (std::size_t v = 0; v < nv; ++v)
+        if (on_boundary[v] && loops.find(static_cast<std::uint32_t>(v)) == v) ++r.boundary_loops;
 
     r.closed = nf > 0 && r.boundary_edges == 0;
     r.manifold = r.non_manifold_edges == 0 && r.non_manifold_vertices == 0;

@@ -34,6 +34,9 @@ struct MeshReport {
 
     /// Edges used by exactly one face (summed over all faces, degenerate and duplicate ones included).
     std::size_t boundary_edges = 0;
+    /// Boundary loops: sets of boundary edges connected through their vertices (a hole is one loop;
+    /// two holes meeting at one vertex count as one).
+    std::size_t boundary_loops = 0;
     /// Edges used by more than two faces (a duplicated face makes its three edges non-manifold;
     /// a face (a,b,a) uses edge {a,b} twice).
     std::size_t non_manifold_edges = 0;

@@ -110,10 +110,32 @@ TEST(MeshReport, CubeWithOneFaceRemovedHasFourBoundaryEdges) {
     m.triangles.erase(m.triangles.begin(), m.triangles.begin() + 2);  // the z = 0 square
     const auto r = nf::mesh_report(m);
     EXPECT_EQ(r.boundary_edges, 4u);
+    EXPECT_EQ(r.boundary_loops, 1u);
     EXPECT_FALSE(r.closed);
     EXPECT_TRUE(r.manifold);
     EXPECT_TRUE(r.oriented);
     EXPECT_EQ(r.euler_characteristic, 1);  // disc
+}
+
+TEST(MeshReport, BoundaryLoopsCountHolesNotEdges) {
+    // a cube without its bottom and top squares: a tube with two loops of 4 edges
+    Mesh m = cube();
+    std::vector<Tri> kept;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f)
+        if (f >= 4) kept.push_back(m.triangles[f]);  // faces 0..3: the z = 0 and z = 1 squares
+    m.triangles = kept;
+    const auto r = nf::mesh_report(m);
+    EXPECT_EQ(r.boundary_edges, 8u);
+    EXPECT_EQ(r.boundary_loops, 2u);
+    EXPECT_EQ(nf::mesh_report(cube()).boundary_loops, 0u);
+    // two separate open cubes: two loops
+    Mesh one = cube();
+    one.triangles.erase(one.triangles.begin(), one.triangles.begin() + 2);
+    EXPECT_EQ(nf::mesh_report(concat(one, [&] {
+                  Mesh o = one;
+                  for (Vec3f& p : o.positions) p.x += 3;
+                  return o;
+              }())).boundary_loops, 2u);
 }
 
 TEST(MeshReport, TwoTetsSharingAnEdgeGiveOneNonManifoldEdge) {
