@@ -260,8 +260,22 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.seconds.total += r.seconds.smooth;
     }
     const bool open = has_open_boundary(m);
-    const bool keep = o.connectivity == Connectivity::Keep ||
-                      (o.connectivity == Connectivity::Auto && o.target_faces == 0 && !o.closed && open);
+    const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && !o.closed;
+    bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
+    Stopwatch fit_clock;
+    Mesh fitted;
+    if (keep || (automatic && !open)) {
+        // A closed input is kept when its fitted faces agree with the volume's normals (kAutoKeepFitAngleDeg):
+        // the noise moved its vertices across the surface only, not along it.
+        detail::begin(progress, "fit");
+        fitted = m;
+        r.fit = fit_mesh_to_volume(fitted, v, o.fit);
+        r.fitted = true;
+        if (!keep) keep = r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
+        const double seconds = fit_clock.lap();
+        r.seconds.extract += seconds;
+        r.seconds.total += seconds;
+    }
     if (!keep) {
         result.mesh = volume_to_mesh(v, o, &r, progress);
         std::unique_ptr<ClosestTriangleQuery> q;
@@ -285,17 +299,15 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
                                  "(--connectivity keep keeps them)");
         return result;
     }
-    Stopwatch clock;
-    detail::begin(progress, "fit");
-    result.mesh = m;
-    r.fit = fit_mesh_to_volume(result.mesh, v, o.fit);
+    result.mesh = std::move(fitted);
     set_volume_normals(result.mesh, v);  // replaces the input's normals, which belong to the noisy surface
     r.connectivity_kept = true;
     if (r.fit.outside_band > 0)
         r.warnings.push_back(std::to_string(r.fit.outside_band) +
                              " vertices were outside the volume's band and stayed where they were");
-    r.seconds.extract = clock.lap();
-    r.seconds.total += r.seconds.extract;
+    const double seconds = fit_clock.lap();
+    r.seconds.extract += seconds;
+    r.seconds.total += seconds;
     r.peak_memory_bytes = peak_memory_bytes();
     return result;
 }

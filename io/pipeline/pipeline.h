@@ -51,7 +51,8 @@ inline constexpr int kAutoResolutionMax = 512;
 /// Options of smooth_mesh (and of its halves, mesh_to_volume and volume_to_mesh).
 /// What smooth_mesh hands back.
 enum class Connectivity {
-    Auto,    ///< Keep for an open input (has_open_boundary), Remesh for a closed one
+    Auto,    ///< Keep for an open input (has_open_boundary) and for a closed one whose fit agrees with the
+             ///< result (kAutoKeepFitAngleDeg), Remesh for the other closed ones
     Keep,    ///< the input mesh itself, its vertices moved onto the processed surface (fit_mesh_to_volume):
              ///< the same vertices, faces and order, open where the input was open
     Remesh,  ///< the extracted zero level set: a new mesh, closed and manifold
@@ -59,6 +60,14 @@ enum class Connectivity {
 
 /// "auto", "keep", "remesh".
 const char* to_string(Connectivity c);
+
+/// Connectivity::Auto keeps a closed input's mesh when, fitted to the processed volume, its faces
+/// are within this mean angle (degrees, FitReport::mean_face_angle_deg) of the volume's normals, and
+/// re-meshes it otherwise. Chosen on the study's 12 closed pairs (benchmarks/README.md, "The user's mesh
+/// handed back"): every pair kept better than re-meshed fitted within 2.14°, every pair re-meshed better
+/// (heavy noise that tangled the triangles: fandisk_n0.7, fandisk_n6, trimstar_n0.5, vaselion) beyond
+/// 2.86°; the one exception, twelve_imp0.5 (1.66°), is kept at a cost of 0.18°.
+inline constexpr double kAutoKeepFitAngleDeg = 2.5;
 
 struct PipelineOptions {
     /// Scan conversion: resolution (0: automatic, auto_resolution) or voxel size, band half-width (raised to
@@ -80,8 +89,8 @@ struct PipelineOptions {
     /// 0: the median edge length of the input (model_length_scale).
     double length_scale = 0;
     /// What comes back: the input's own mesh fitted to the result, or a new one extracted from it.
-    /// Auto keeps an open input's (the volume closes it; an extraction would be a closed blob with the
-    /// cap) and re-meshes a closed one. Keep refuses target_faces.
+    /// Auto keeps an open input's, and a closed input's whose fitted faces agree with the result
+    /// (kAutoKeepFitAngleDeg), and re-meshes the others. Keep refuses target_faces.
     Connectivity connectivity = Connectivity::Auto;
     /// An open input re-meshed comes back open: the cap that closed its volume is trimmed off
     /// (trim_to_footprint). closed = true keeps the closed, watertight surface instead (3D printing,
@@ -122,7 +131,8 @@ struct PipelineReport {
     SmoothReport smooth;         ///< valid when smoothed
     ExtractReport extract;       ///< valid when !connectivity_kept
     bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
-    FitReport fit;               ///< valid when connectivity_kept
+    bool fitted = false;         ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
+    FitReport fit;               ///< valid when fitted
     bool trimmed = false;        ///< an open input's re-meshed result was trimmed to its footprint
     TrimReport trim;             ///< valid when trimmed
     bool decimated = false;      ///< decimation ran (target_faces > 0)

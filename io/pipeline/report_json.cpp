@@ -111,15 +111,14 @@ Json to_json(const PipelineReport& r) {
     j.set("voxelize", vox);
     if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
     j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");
-    if (r.connectivity_kept) {
+    if (r.fitted) {
         Json f = Json::object();
         f.set("vertices", r.fit.vertices).set("boundary_vertices", r.fit.boundary_vertices)
             .set("outside_band", r.fit.outside_band).set("mean_distance", r.fit.mean_distance)
             .set("max_distance", r.fit.max_distance).set("mean_face_angle_deg", r.fit.mean_face_angle_deg);
         j.set("fit", f);
-    } else {
-        j.set("extract", to_json(r.extract));
     }
+    if (!r.connectivity_kept) j.set("extract", to_json(r.extract));
     if (r.trimmed) {
         Json t = Json::object();
         t.set("faces_removed", r.trim.faces_removed).set("components_removed", r.trim.components_removed);

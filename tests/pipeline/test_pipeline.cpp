@@ -45,7 +45,9 @@ std::string message_of(F&& f) {
 TEST(Pipeline, SphereGivesAClosedManifoldMeshNearTheInput) {
     const double r = 1.0;
     const Mesh sphere = test::icosphere(r, 3);
-    const PipelineResult res = smooth_mesh(sphere, quick_options());
+    PipelineOptions o = quick_options();
+    o.connectivity = Connectivity::Remesh;  // auto would keep this clean sphere's own mesh
+    const PipelineResult res = smooth_mesh(sphere, o);
     const PipelineReport& rep = res.report;
     const Mesh& out = res.mesh;
     const MeshReport mr = mesh_report(out);
@@ -69,6 +71,7 @@ TEST(Pipeline, HalvesComposeToTheWhole) {
     const Mesh sphere = test::icosphere(1.0, 2);
     PipelineOptions o = quick_options();
     o.smoothing = false;
+    o.connectivity = Connectivity::Remesh;
     const Mesh whole = smooth_mesh(sphere, o).mesh;
     const Volume v = mesh_to_volume(sphere, o);
     const Mesh halves = volume_to_mesh(v, o);
@@ -276,7 +279,21 @@ TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
     EXPECT_LT(worst, 0.1);
     EXPECT_NE(to_json(kept.report).dump().find("\"connectivity\":\"kept\""), std::string::npos);
 
-    const PipelineResult closed = smooth_mesh(test::icosphere(1.0, 3), o);
+    // a closed input: kept when its fitted faces agree with the result (a clean sphere), re-meshed when
+    // the noise tangled its triangles along the surface (kAutoKeepFitAngleDeg)
+    const PipelineResult clean = smooth_mesh(test::icosphere(1.0, 3), o);
+    EXPECT_TRUE(clean.report.connectivity_kept);
+    EXPECT_LT(clean.report.fit.mean_face_angle_deg, kAutoKeepFitAngleDeg);
+    Mesh tangled = test::icosphere(1.0, 3);
+    std::uint32_t state = 12345;
+    const auto uniform = [&] {  // in [-1, 1), fixed sequence
+        state = state * 1664525u + 1013904223u;
+        return double(state >> 8) / double(1u << 23) - 1.0;
+    };
+    for (Vec3f& p : tangled.positions) p = Vec3f(Vec3d(p) + Vec3d(uniform(), uniform(), uniform()) * 0.15);
+    const PipelineResult closed = smooth_mesh(tangled, o);
+    EXPECT_TRUE(closed.report.fitted);
+    EXPECT_GE(closed.report.fit.mean_face_angle_deg, kAutoKeepFitAngleDeg);
     EXPECT_FALSE(closed.report.connectivity_kept);
     EXPECT_TRUE(mesh_report(closed.mesh).closed);
 
