@@ -111,4 +111,23 @@ void add_output_flags(CLI::App* cmd, OutputFlags& out) {
     cmd->add_flag("-q,--quiet", out.quiet, "print nothing but errors");
 }
 
+std::vector<std::string> attribute_names(const Mesh& m) {
+    std::vector<std::string> out;
+    if (m.has_normals()) out.emplace_back("normals");
+    if (m.has_colors()) out.emplace_back("colors");
+    if (m.has_texcoords()) out.emplace_back("texcoords");
+    return out;
+}
+
+std::string attribute_words(const Mesh& m) {
+    std::string out;
+    const auto add = [&](bool has, const char* word) {
+        if (has) out += (out.empty() ? "" : ", ") + std::string(word);
+    };
+    add(m.has_normals(), "normals");
+    add(m.has_colors(), "colours");
+    add(m.has_texcoords(), "texture coordinates");
+    return out.empty() ? "none" : out;
+}
+
 }  // namespace normalflow::cli

@@ -6,7 +6,9 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "core/mesh.h"
 #include "core/progress.h"
 #include "core/stopwatch.h"
 #include "io/pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
@@ -48,6 +50,11 @@ bool interrupted();
 /// \throw InvalidInput naming the option for anything else.
 std::size_t parse_bytes(const std::string& text, const char* option);
 
+
+/// The per-vertex attributes m has, as JSON names ("normals", "colors", "texcoords") and as words for a
+/// text line ("normals, colours, texture coordinates"; "none").
+std::vector<std::string> attribute_names(const Mesh& m);
+std::string attribute_words(const Mesh& m);
 
 /// Runs fn, mapping normalflow's exceptions to one line on stderr and an exit status:
 /// 0 ok, 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled.

@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <memory>
 #include <string>
-#include <tuple>
 
 #include "commands.h"
 #include "core/errors.h"
@@ -36,22 +35,13 @@ int run_compress(const CompressArgs& a) {
     // Raw size: float32 positions, normals and texture coordinates, 8-bit RGBA colours, uint32 indices.
     const std::size_t raw = m.positions.size() * 12 + m.normals.size() * 12 + m.colors.size() * 4 +
                             m.texcoords.size() * 8 + m.triangles.size() * 12;
-    std::string attributes;  // "normals, colours" for the text line
-    Json listed = Json::array();
-    for (const auto& [has, name, word] : {std::tuple{m.has_normals(), "normals", "normals"},
-                                          std::tuple{m.has_colors(), "colors", "colours"},
-                                          std::tuple{m.has_texcoords(), "texcoords", "texture coordinates"}})
-        if (has) {
-            listed.push(name);
-            attributes += (attributes.empty() ? "" : ", ") + std::string(word);
-        }
     if (a.out.json) {
         Json j = Json::object();
         j.set("command", "compress").set("input", a.input).set("output", a.output)
             .set("vertices", m.positions.size()).set("triangles", m.triangles.size())
             .set("bytes_before", static_cast<std::size_t>(in_bytes)).set("bytes_raw", raw)
             .set("bytes_after", static_cast<std::size_t>(out_bytes))
-            .set("attributes", listed).set("position_bits", a.draco.position_bits)
+            .set("attributes", Json::array(attribute_names(m))).set("position_bits", a.draco.position_bits)
             .set("normal_bits", a.draco.normal_bits).set("texcoord_bits", a.draco.texcoord_bits)
             .set("compression_level", a.draco.compression_level)
             .set("seconds_read", t_read).set("seconds_compress", t_write);
@@ -60,7 +50,7 @@ int run_compress(const CompressArgs& a) {
         std::printf("compress: %s (%zu bytes) -> %s (%zu bytes, %.1fx; raw %zu bytes%s%s) in %.3f s\n",
                     a.input.c_str(), static_cast<std::size_t>(in_bytes), a.output.c_str(),
                     static_cast<std::size_t>(out_bytes), out_bytes ? double(in_bytes) / double(out_bytes) : 0.0, raw,
-                    attributes.empty() ? "" : "; with ", attributes.c_str(), t_write);
+                    m.has_attributes() ? "; with " : "", m.has_attributes() ? attribute_words(m).c_str() : "", t_write);
     }
     return 0;
 }

@@ -28,6 +28,8 @@ int run_info(const InfoArgs& a) {
     Stopwatch clock;
     ReadInfo info;
     Mesh mesh = read_mesh(a.input, &info);
+    const std::vector<std::string> attributes = attribute_names(mesh);  // before --repair drops them
+    const std::string attribute_text = attribute_words(mesh);
     bool repaired = false;
 #ifdef NORMALFLOW_HAS_CGAL
     RepairReport rep;
@@ -49,7 +51,7 @@ int run_info(const InfoArgs& a) {
         Json j = to_json(r);  // every MeshReport field
         j.set("command", "info").set("input", a.input).set("format", info.format);
         j.set("file_vertices", info.file_vertices).set("file_faces", info.file_faces);
-        j.set("polygons_split", info.polygons_split);
+        j.set("polygons_split", info.polygons_split).set("attributes", Json::array(attributes));
         if (self_intersections >= 0) j.set("self_intersecting_pairs", self_intersections);
 #ifdef NORMALFLOW_HAS_CGAL
         if (repaired) j.set("repair", to_json(rep));
@@ -65,6 +67,7 @@ int run_info(const InfoArgs& a) {
     std::printf("%s (%s)\n", a.input.c_str(), info.format.c_str());
     std::printf("  in file          %zu points, %zu faces%s\n", info.file_vertices, info.file_faces,
                 info.polygons_split ? " (polygons split into triangles)" : "");
+    std::printf("  attributes       %s\n", attribute_text.c_str());
 #ifdef NORMALFLOW_HAS_CGAL
     if (repaired) {
         std::printf("  repair           %zu points merged, %zu degenerate and %zu duplicate faces removed,\n",

@@ -474,6 +474,10 @@ TEST(Pipeline, CliTexturedInputKeepsItsAttributesThroughSmoothAndCompress) {
     EXPECT_EQ(smoothed.colors, in.colors);
     EXPECT_EQ(smoothed.texcoords, in.texcoords);
     ASSERT_TRUE(smoothed.has_normals());
+    const std::string info = cli + " info " + out + " --json > " + (dir / "info.json");
+    ASSERT_EQ(std::system(info.c_str()), 0) << info;
+    EXPECT_NE(test::slurp(dir / "info.json").find(R"("attributes":["normals","colors","texcoords"])"), std::string::npos)
+        << test::slurp(dir / "info.json");
     for (const std::string ext : {".glb", ".drc"}) {
         SCOPED_TRACE(ext);
         const std::string packed = dir / ("out" + ext);
