@@ -244,6 +244,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     PipelineResult result;
     PipelineReport& r = result.report;
     Volume v = mesh_to_volume(m, o, &r, progress);
+    NormalMap normal_map;  // the engine's last filtered normals: the kept mesh's face targets
     if (o.smoothing) {
         Stopwatch clock;
         SmoothOptions so = o.smooth;
@@ -253,7 +254,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         } else {
             r.length_scale = double(so.length_scale) * v.grid.voxel_size;
         }
-        r.smooth = smooth_volume(v, so, progress);
+        r.smooth = smooth_volume(v, so, progress, &normal_map);
         r.smoothed = true;
         append(r.warnings, r.smooth.warnings);
         r.seconds.smooth = clock.lap();
@@ -269,7 +270,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         // the noise moved its vertices across the surface only, not along it.
         detail::begin(progress, "fit");
         fitted = m;
-        r.fit = fit_mesh_to_volume(fitted, v, o.fit);
+        r.fit = fit_mesh_to_volume(fitted, v, o.fit,
+                                   o.fit_to_normal_map && !normal_map[0].values.empty() ? &normal_map : nullptr);
         r.fitted = true;
         if (!keep) keep = r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
         const double seconds = fit_clock.lap();

@@ -98,6 +98,9 @@ struct PipelineOptions {
     bool closed = false;
     /// The fit of the input's mesh (Connectivity::Keep).
     FitOptions fit;
+    /// Turn the kept mesh's faces to the engine's last filtered normal map (smooth_volume's normal_map)
+    /// rather than to ∇φ of the result.
+    bool fit_to_normal_map = false;
     /// Extraction of the zero level set.
     ExtractOptions extract;
     /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (CGAL edge collapse,

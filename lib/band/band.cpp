@@ -62,6 +62,19 @@ void Band::write_back(Volume& v) const {
     for_samples(phi_.size(), [&](std::size_t i) { v.values[i] = phi_[i] * h; });
 }
 
+void Band::write_field(const Samples& s, float missing, Volume& out) const {
+    out.grid = grid_;
+    out.half_width = kHalfWidth;
+    out.background = missing;
+    out.block_dims = block_dims_;
+    out.block_table = table_;
+    for (std::int32_t& t : out.block_table)
+        if (t < 0) t = kBlockOutside;  // every tile reads `missing`
+    out.block_coords = coords_;
+    out.values.resize(s.size());
+    for_samples(s.size(), [&](std::size_t i) { out.values[i] = mask_[i] ? s[i] : missing; });
+}
+
 void Band::make_neighbourhood(std::size_t b, Neighbourhood& n) const {
     const auto& bc = coords_[b];
     for (int a = 0; a < 3; ++a) {

@@ -76,6 +76,9 @@ public:
 
     /// The volume from φ: world units, the band's blocks, half width kHalfWidth.
     void write_back(Volume& v) const;
+    /// A per-sample field as a Volume on the band's grid and blocks: s at the active samples (the mask
+    /// of build_active), `missing` at the other samples and in the tiles (background = missing).
+    void write_field(const Samples& s, float missing, Volume& out) const;
 
     // ---- layout
     std::size_t nblocks() const { return coords_.size(); }

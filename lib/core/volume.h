@@ -134,4 +134,10 @@ struct Volume {
     }
 };
 
+/// A normal map on a volume's grid: one Volume per component of the unit normal N, holding N where it
+/// is defined and kNoNormal elsewhere (their background). smooth_volume hands out the last normal map
+/// it filtered; fit_mesh_to_volume can turn faces to it.
+using NormalMap = std::array<Volume, 3>;
+inline constexpr float kNoNormal = 2.0f;
+
 }  // namespace normalflow

@@ -80,7 +80,7 @@ bool has_open_boundary(const Mesh& m) {
     return std::find(on.begin(), on.end(), 1) != on.end();
 }
 
-FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o) {
+FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o, const NormalMap* targets) {
     if (o.projection_steps < 0 || o.relax_steps < 0 || o.vertex_steps < 0 || o.boundary_rings < 0)
         throw InvalidInput("fit_mesh_to_volume: projection_steps, relax_steps, vertex_steps and boundary_rings must be >= 0");
     check_mesh(m, "fit_mesh_to_volume");
@@ -208,6 +208,10 @@ FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o) {
                 const Tri& t = m.triangles[f];
                 const Vec3d c = (x[group[t[0]]] + x[group[t[1]]] + x[group[t[2]]]) / 3.0;
                 if (S.outside_band(c)) continue;
+                if (targets && detail::sample_normal_map(*targets, c, normal[f])) {
+                    usable[f] = 1;
+                    continue;
+                }
                 Vec3d g;
                 S.phi(c, &g);
                 const double len = norm(g);

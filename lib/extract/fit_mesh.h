@@ -50,6 +50,9 @@ struct FitReport {
 ///    Jacobi iterations of x_v ← x_v + (1/|F_v|) Σ_{f∋v} n_f (n_f·(c_f − x_v)). The sign of n_f
 ///    does not matter, so inconsistently oriented faces are fitted as well.
 /// φ and ∇φ are trilinear interpolations of the samples and of their central differences.
+/// With targets (the engine's last filtered normal map, smooth_volume), step 2 turns the faces to N
+/// interpolated at their centroids instead of ∇φ (which the grid smears across a crease), falling
+/// back to ∇φ where the map has no normal; the report's face angle is still measured against ∇φ.
 /// Coincident positions (a seam of an OBJ, an unwelded STL) are one vertex: they move together and
 /// stay coincident. Positions in no triangle stay where they are.
 ///
@@ -58,7 +61,8 @@ struct FitReport {
 /// \throw InvalidInput for negative options, an index out of range or a non-finite position.
 /// Cost: O(V·projection_steps + F·vertex_steps) lookups, TBB parallel over vertices; the result
 /// does not depend on the thread count.
-FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& options = {});
+FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& options = {},
+                             const NormalMap* targets = nullptr);
 
 /// Whether m has an edge of exactly one face once coincident positions are welded (an open
 /// surface: a scan, a sheet, a mesh with holes).

@@ -52,4 +52,27 @@ private:
     double h_;
 };
 
+/// The trilinear interpolation of a normal map at p, normalised, into n; false where a corner has no
+/// normal (kNoNormal) or the blend vanishes.
+inline bool sample_normal_map(const NormalMap& map, const Vec3d& p, Vec3d& n) {
+    const Vec3d g = map[0].grid.index(p);
+    const int i = int(std::floor(g.x)), j = int(std::floor(g.y)), k = int(std::floor(g.z));
+    const double fx = g.x - i, fy = g.y - j, fz = g.z - k;
+    double sum[3] = {0, 0, 0};
+    for (int c = 0; c < 8; ++c) {
+        const int dx = c & 1, dy = (c >> 1) & 1, dz = (c >> 2) & 1;
+        const double w = (dx ? fx : 1 - fx) * (dy ? fy : 1 - fy) * (dz ? fz : 1 - fz);
+        for (int a = 0; a < 3; ++a) {
+            const float value = map[std::size_t(a)].value(i + dx, j + dy, k + dz);
+            if (!(std::abs(value) < 1.5f)) return false;
+            sum[a] += w * value;
+        }
+    }
+    const Vec3d s(sum[0], sum[1], sum[2]);
+    const double len = norm(s);
+    if (!(len > 1e-6)) return false;
+    n = s / len;
+    return true;
+}
+
 }  // namespace normalflow::detail

@@ -55,7 +55,8 @@ double seconds_since(Clock::time_point t0) {
 float working_limit(const SmoothOptions& opt) { return std::min(engine::kHalfWidth, opt.active_band + 3.0f); }
 
 /// The main iterations on a band with a surface (opt.iterations resolved).
-void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progress* progress, bool auto_stop) {
+void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progress* progress, bool auto_stop,
+         NormalMap* normal_map) {
     using namespace engine;
     RunControl ctl(progress, opt.iterations);
     StageContext c{band, opt, rep, ctl};
@@ -82,6 +83,8 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
             const double volume = keep ? active_volume(band) : 0.0;
             refit_to_normals(c);
             if (keep && record.refit_steps > 0) record.volume_shift = restore_volume(band, volume);
+            if (normal_map)  // this iteration's N, the last one's in the end (the band moves next)
+                for (std::size_t a = 0; a < 3; ++a) band.write_field(band.work().normals[a], kNoNormal, (*normal_map)[a]);
             rep.seconds_refit += seconds_since(t1);
         } else {
             const auto t0 = Clock::now();
@@ -172,7 +175,7 @@ int default_normal_steps(SmoothMode mode) {
     return is_neighbourhood_filter(mode) ? kNeighbourhoodPasses : 50;
 }
 
-SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress) {
+SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress, NormalMap* normal_map) {
     validate(v, options);
     SmoothReport rep;
     if (options.normal_dt > engine::kMaxDt)
@@ -191,7 +194,7 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
             return;
         }
         const bool auto_stop = options.iterations == 0 && is_neighbourhood_filter(opt.mode);
-        run(band, opt, rep, progress, auto_stop);
+        run(band, opt, rep, progress, auto_stop, normal_map);
         band.write_back(v);
     };
     if (options.threads > 0) {

@@ -217,6 +217,10 @@ struct SmoothReport {
 ///                 blocks that hold the surface and their 26 neighbours, tiles carry the right sign.
 /// \param opt      options (voxel units, see SmoothOptions).
 /// \param progress optional; ticked once per normal/refit step; may cancel.
+/// \param normal_map optional: receives the normal map N the last main iteration filtered and refitted
+///                 to, on the band of that iteration (its active samples; kNoNormal elsewhere): the
+///                 targets fit_mesh_to_volume turns a kept mesh's faces to. Left empty for
+///                 MeanCurvature (no normal map) and for a volume without a surface.
 ///
 /// Accepted input: any Volume whose allocated blocks hold the surface (a band of >= 1 voxel each
 /// side) and whose unallocated blocks are tiled with the right sign. Open or many-component
@@ -234,6 +238,7 @@ struct SmoothReport {
 /// 2 cores, benchmarks/README.md);
 /// threads via TBB over blocks, each step writes a second buffer and reductions are summed in a
 /// fixed order, so the result is bit-identical for any thread count.
-SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt = {}, Progress* progress = nullptr);
+SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt = {}, Progress* progress = nullptr,
+                           NormalMap* normal_map = nullptr);
 
 }  // namespace normalflow
