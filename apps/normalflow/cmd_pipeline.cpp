@@ -302,6 +302,8 @@ void add_smooth_command(CLI::App& app) {
                     "keep: the input's own mesh, its vertices moved onto the result; remesh: a new mesh "
                     "extracted from it (open where the input is open, see --closed); auto (default): keep for an "
                     "open input, remesh for a closed one");
+    cmd->add_flag("--fit-to-normal-map", a->pipeline.fit_to_normal_map,
+                  "keep: turn the faces to the engine's last filtered normal map instead of the result's gradient");
     cmd->add_flag("--closed", a->pipeline.closed,
                   "re-mesh an open input as a closed, watertight surface (3D printing, tetrahedra) instead of "
                   "trimming it to the input's footprint");
