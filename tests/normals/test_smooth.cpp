@@ -77,6 +77,42 @@ TEST(SmoothVolume, SphereDoesNotDriftIsotropic) {
     EXPECT_LT(radial_stats(v, c).max_deviation, 0.15);  // still a sphere
 }
 
+TEST(SmoothVolume, HandsOutItsLastNormalMapUnitAndRadialOnASphere) {
+    const Vec3d c(24.3, 23.8, 24.1);
+    for (const SmoothMode mode : {SmoothMode::Isotropic, SmoothMode::Bilateral}) {
+        SCOPED_TRACE(to_string(mode));
+        Volume v = make_volume(48, 1.0, sphere_sdf(c, 14.0));
+        SmoothOptions o;
+        o.mode = mode;
+        o.iterations = 2;
+        NormalMap map;
+        smooth_volume(v, o, nullptr, &map);
+        std::size_t defined = 0, near_surface = 0;
+        double worst = 0;
+        for (int k = 0; k < 48; ++k)
+            for (int j = 0; j < 48; ++j)
+                for (int i = 0; i < 48; ++i) {
+                    const Vec3d p = v.grid.world(Vec3d(i, j, k));
+                    const bool near = std::abs(norm(p - c) - 14.0) < 1.0;
+                    near_surface += near;
+                    if (!(std::abs(map[0].value(i, j, k)) < 1.5f)) continue;
+                    ++defined;
+                    const Vec3d n(map[0].value(i, j, k), map[1].value(i, j, k), map[2].value(i, j, k));
+                    EXPECT_NEAR(norm(n), 1.0, 1e-3);
+                    if (near) worst = std::max(worst, std::acos(std::min(1.0, dot(n, (p - c) / norm(p - c)))) * 57.29578);
+                }
+        EXPECT_GE(defined, near_surface);  // every sample within a voxel of the surface, and more
+        EXPECT_LT(worst, 5.0);             // outward and radial (the worst sample; 3.4° measured)
+    }
+    Volume v = make_volume(48, 1.0, sphere_sdf(c, 14.0));
+    SmoothOptions o;
+    o.mode = SmoothMode::MeanCurvature;
+    o.iterations = 1;
+    NormalMap map;
+    smooth_volume(v, o, nullptr, &map);
+    EXPECT_TRUE(map[0].values.empty());  // mean curvature flow has no normal map
+}
+
 TEST(SmoothVolume, SphereDoesNotDriftAnisotropic) {
     const Vec3d c(24.3, 23.8, 24.1);
     Volume v = make_volume(48, 1.0, sphere_sdf(c, 14.0));
