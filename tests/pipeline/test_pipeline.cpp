@@ -417,6 +417,28 @@ TEST(Pipeline, RealOpenInputsKeepTheirLoopsInBothModesOrCloseWhenAsked) {
     }
 }
 
+TEST(Pipeline, FitToTheNormalMapIsUsedWhenAsked) {
+    // the same run, the kept mesh turned to ∇φ or to the engine's normal map: both land on the surface,
+    // and they differ (the option reaches the fit)
+    PipelineOptions o = quick_options();
+    o.connectivity = Connectivity::Keep;
+    Mesh noisy = test::icosphere(1.0, 3);
+    for (std::size_t i = 0; i < noisy.positions.size(); ++i)
+        noisy.positions[i] = noisy.positions[i] * float(1.0 + 0.01 * double(int(i * 7919 % 13) - 6) / 6.0);
+    const PipelineResult by_gradient = smooth_mesh(noisy, o);
+    o.fit_to_normal_map = true;
+    const PipelineResult by_map = smooth_mesh(noisy, o);
+    EXPECT_NE(by_map.mesh.positions, by_gradient.mesh.positions);
+    EXPECT_EQ(by_map.mesh.triangles, noisy.triangles);
+    EXPECT_LT(by_map.report.fit.mean_distance, 0.5 * by_map.report.scan.grid.voxel_size);
+    // mean curvature flow has no normal map: the fit falls back to the gradient, as without the option
+    o.smooth.mode = SmoothMode::MeanCurvature;
+    o.fit_to_normal_map = false;
+    const Mesh mcf = smooth_mesh(noisy, o).mesh;
+    o.fit_to_normal_map = true;
+    EXPECT_EQ(smooth_mesh(noisy, o).mesh.positions, mcf.positions);
+}
+
 TEST(Pipeline, EmptyVolumeMessages) {
     Grid g;
     g.voxel_size = 0.1;
