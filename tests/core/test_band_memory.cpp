@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <string>
@@ -62,6 +63,21 @@ TEST(BandMemory, SmallArraysComeFromTheHeap) {
         EXPECT_EQ(vm_flags_of(v.data()).find(" hg"), std::string::npos);
     }
     EXPECT_EQ(std::accumulate(v.begin(), v.end(), 0.0f), 2000.0f);
+}
+
+TEST(BandMemory, NoInitArraysStartAtZeroEvenInReusedHeapMemory) {
+    // Memory freed by other data (here NaN bit patterns) and handed out again by malloc must not reach
+    // the engine: a stage that reads an unwritten sample with a zero weight would turn it into NaN.
+    using Vec = std::vector<float, NoInitAllocator<float>>;
+    for (const std::size_t n : {std::size_t(16), std::size_t(4000), std::size_t(60000)}) {
+        for (int round = 0; round < 4; ++round) {
+            { std::vector<float> junk(n, std::numeric_limits<float>::quiet_NaN()); }
+            Vec v(n);
+            for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(v[i], 0.0f) << "n " << n << ", element " << i;
+        }
+    }
+    Vec big(2 * (kHugePageBytes / sizeof(float)));  // a fresh mapping: zeros too
+    EXPECT_EQ(std::accumulate(big.begin(), big.end(), 0.0f), 0.0f);
 }
 
 TEST(BandMemory, NoInitKeepsContentsWhenGrowingAndCopies) {
