@@ -60,16 +60,12 @@ void transfer_colors(Mesh& m, const Mesh& source, const ClosestTriangleQuery& q)
                               const ClosestHit h = q.closest(Vec3d(m.positions[i]));
                               if (!h.found()) continue;
                               const Tri& t = source.triangles[h.triangle];
-                              const Vec3d a(source.positions[t[0]]), b(source.positions[t[1]]),
-                                  c(source.positions[t[2]]);
-                              // barycentric coordinates of the closest point (clamped for degenerate faces)
-                              const Vec3d n = cross(b - a, c - a);
-                              const double nn = dot(n, n);
+                              // barycentric coordinates of the closest point, clamped (the first corner's
+                              // colour for a zero-area face)
                               double w[3] = {1, 0, 0};
-                              if (nn > 0) {
-                                  w[1] = dot(cross(h.point - a, c - a), n) / nn;
-                                  w[2] = dot(cross(b - a, h.point - a), n) / nn;
-                                  w[0] = 1 - w[1] - w[2];
+                              if (barycentric_coordinates(h.point, Vec3d(source.positions[t[0]]),
+                                                          Vec3d(source.positions[t[1]]),
+                                                          Vec3d(source.positions[t[2]]), w)) {
                                   double total = 0;
                                   for (double& x : w) total += (x = std::max(x, 0.0));
                                   for (double& x : w) x = total > 0 ? x / total : 1.0 / 3;

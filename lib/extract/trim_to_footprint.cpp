@@ -113,12 +113,10 @@ TrimReport trim_to_footprint(Mesh& m, const Mesh& input, const ClosestTriangleQu
             const std::size_t f = h.triangle;
             const Tri& t = input.triangles[f];
             // barycentric coordinates of the closest point; a coordinate ~0 puts it on the opposite edge
-            const Vec3d a(input.positions[t[0]]), b(input.positions[t[1]]), c(input.positions[t[2]]);
-            const Vec3d n = cross(b - a, c - a);
-            const double nn = dot(n, n);
-            if (!(nn > 0)) continue;
-            const double wb = dot(cross(h.point - a, c - a), n) / nn, wc = dot(cross(b - a, h.point - a), n) / nn;
-            const double bary[3] = {1 - wb - wc, wb, wc};
+            double bary[3];
+            if (!barycentric_coordinates(h.point, Vec3d(input.positions[t[0]]), Vec3d(input.positions[t[1]]),
+                                         Vec3d(input.positions[t[2]]), bary))
+                continue;
             constexpr double eps = 1e-6;
             std::uint32_t on = kNoLoop;  // a welded rim vertex of the edge or corner the point lies on
             for (int k = 0; k < 3 && on == kNoLoop; ++k) {

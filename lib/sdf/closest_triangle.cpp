@@ -105,6 +105,16 @@ private:
 
 }  // namespace
 
+bool barycentric_coordinates(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c, double w[3]) {
+    const Vec3d n = cross(b - a, c - a);
+    const double nn = dot(n, n);
+    if (!(nn > 0)) return false;
+    w[1] = dot(cross(p - a, c - a), n) / nn;
+    w[2] = dot(cross(b - a, p - a), n) / nn;
+    w[0] = 1 - w[1] - w[2];
+    return true;
+}
+
 Vec3d closest_point_on_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
     const Vec3d ab = b - a, ac = c - a, ap = p - a;
     const Vec3d n = cross(ab, ac);

@@ -52,6 +52,11 @@ public:
 /// for zero-area triangles (falls back to the closest point on the three edges).
 Vec3d closest_point_on_triangle(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c);
 
+/// Barycentric coordinates w (of a, b, c) of a point p in the plane of triangle (a, b, c), such as the
+/// point closest_point_on_triangle returns: p = w[0] a + w[1] b + w[2] c. false (w untouched) for a
+/// zero-area triangle.
+bool barycentric_coordinates(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c, double w[3]);
+
 /// Brute force: O(#F) per query, for tests and cross-checks. Copies the mesh.
 std::unique_ptr<ClosestTriangleQuery> make_brute_force_query(const Mesh& m);
 
