@@ -244,7 +244,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     PipelineResult result;
     PipelineReport& r = result.report;
     Volume v = mesh_to_volume(m, o, &r, progress);
-    NormalMap normal_map;  // the engine's last filtered normals: the kept mesh's face targets
+    NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
     if (o.smoothing) {
         Stopwatch clock;
         SmoothOptions so = o.smooth;
@@ -254,7 +254,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         } else {
             r.length_scale = double(so.length_scale) * v.grid.voxel_size;
         }
-        r.smooth = smooth_volume(v, so, progress, &normal_map);
+        r.smooth = smooth_volume(v, so, progress, o.fit_to_normal_map ? &normal_map : nullptr);
         r.smoothed = true;
         append(r.warnings, r.smooth.warnings);
         r.seconds.smooth = clock.lap();
@@ -271,7 +271,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         detail::begin(progress, "fit");
         fitted = m;
         r.fit = fit_mesh_to_volume(fitted, v, o.fit,
-                                   o.fit_to_normal_map && !normal_map[0].values.empty() ? &normal_map : nullptr);
+                                   normal_map[0].values.empty() ? nullptr : &normal_map);
         r.fitted = true;
         if (!keep) keep = r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
         const double seconds = fit_clock.lap();
