@@ -291,6 +291,13 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--refit-tolerance", s.refit_tolerance,
                     "the refit stops when D falls by less than this fraction of itself in a step")
         ->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--refit-super-steps", s.refit_super_steps,
+                    "bilateral, guided, tv: cover the refit time in this many Runge-Kutta-Legendre super steps (0: explicit steps of --refit-dt)")
+        ->check(CLI::Range(0, 100000))->capture_default_str();
+    cmd->add_flag("--extend-by-gather", s.extend_by_gather,
+                  "bilateral, guided, tv: carry the filtered normals off the surface by a filter pass at each closest point (slower; the default before 0.2)");
+    cmd->add_flag("!--all-samples", s.thin_samples,
+                  "bilateral, guided: filter every shell sample, also where the grid is finer than 5 voxels per length unit (slower; the default before 0.2)");
     cmd->add_option("--refit-dt", s.refit_dt, "refit time step, voxel² (at most 1/6)")
         ->check(CLI::PositiveNumber)->capture_default_str();
     cmd->add_flag("!--no-preserve-volume", s.preserve_volume,

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "io/util/atomic_file.h"
+#include "study_pairs.h"
 #include "io/io.h"
 #include "io/openmesh/smoothing.h"
 #include "io/pipeline/pipeline.h"
@@ -38,6 +39,8 @@
 
 namespace fs = std::filesystem;
 using namespace normalflow;
+using normalflow::bench::Pair;
+using normalflow::bench::find_pairs;
 
 namespace {
 
@@ -79,53 +82,6 @@ std::pair<double, double> torus_error(const Mesh& m, double R, double r) {
         s2 += d * d;
     }
     return {mx, std::sqrt(s2 / double(m.positions.size()))};
-}
-
-/// One noisy input with its ground truth and, where the data has one, a published result.
-struct Pair {
-    std::string set, noisy_name;  // e.g. "pairs_gnf", "fandisk_n0.3"
-    fs::path noisy, truth;
-    std::vector<std::pair<std::string, fs::path>> published;  // method label, result mesh
-};
-
-std::string published_label(const std::string& file) {
-    if (file.find(".nllr_result") != std::string::npos) return "NLLR (published result, Li et al. 2018)";
-    if (file.find(".gcn_result") != std::string::npos) return "GCN-Denoiser (published result, Shen et al. 2022)";
-    return "published result";
-}
-
-/// The pairs of shared/data, following SOURCES.md: X_<noise>.ply with X_gt.ply in the same folder;
-/// pairs_nllr's nicolo_i2 takes pairs_gnf/nicolo_gt.ply, and NLLR's julius result belongs to
-/// pairs_gnf/julius_n0.2.ply (the same noisy mesh up to 1e-7).
-std::vector<Pair> find_pairs(const fs::path& data) {
-    std::vector<Pair> pairs;
-    for (const char* set : {"pairs_gnf", "pairs_gcn", "pairs_nllr"}) {
-        const fs::path dir = data / set;
-        if (!fs::is_directory(dir)) continue;
-        std::vector<fs::path> files;
-        for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path());
-        std::sort(files.begin(), files.end());
-        for (const fs::path& f : files) {
-            const std::string stem = f.stem().string();
-            if (f.extension() != ".ply" || stem.ends_with("_gt") || stem.find("result") != std::string::npos) continue;
-            const auto us = stem.rfind('_');
-            if (us == std::string::npos) continue;
-            const std::string model = stem.substr(0, us);
-            fs::path gt = dir / (model + "_gt.ply");
-            if (!fs::exists(gt)) gt = data / "pairs_gnf" / (model + "_gt.ply");
-            if (!fs::exists(gt)) continue;
-            Pair p{set, stem, f, gt, {}};
-            for (const fs::path& r : files) {
-                const std::string rn = r.filename().string();
-                if (rn.starts_with(stem + ".") && rn.find("_result") != std::string::npos)
-                    p.published.emplace_back(published_label(rn), r);
-            }
-            if (stem == "julius_n0.2" && fs::exists(data / "pairs_nllr/julius_n2.nllr_result.ply"))
-                p.published.emplace_back(published_label(".nllr_result"), data / "pairs_nllr/julius_n2.nllr_result.ply");
-            pairs.push_back(std::move(p));
-        }
-    }
-    return pairs;
 }
 
 /// normalflow's whole pipeline on m, as the tool ships it (io/pipeline smooth_mesh: repair, scan

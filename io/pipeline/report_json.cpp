@@ -1,5 +1,6 @@
 #include "io/pipeline/report_json.h"
 
+#include <algorithm>
 #include <vector>
 
 namespace normalflow {
@@ -30,8 +31,8 @@ Json to_json(const SmoothReport& r) {
     // Per-iteration records as one array per field (the CLI's --json contract since the first
     // release; scripts index them by iteration).
     std::vector<double> seconds, g0, g1, d0, d1;
-    std::vector<std::size_t> band, allocated;
-    std::vector<int> steps;
+    std::vector<std::size_t> band, allocated, points;
+    std::vector<int> steps, evals;
     std::vector<float> mu, shift, rough;
     for (const SmoothIteration& it : r.iterations) {
         shift.push_back(it.volume_shift);
@@ -39,6 +40,7 @@ Json to_json(const SmoothReport& r) {
         seconds.push_back(it.seconds);
         band.push_back(it.band_voxels);
         allocated.push_back(it.allocated_voxels);
+        points.push_back(it.filter_points);
         if (!it.normal_energy.empty()) {  // mean curvature flow has no normal loop and no refit
             g0.push_back(it.normal_energy_start());
             g1.push_back(it.normal_energy_end());
@@ -47,6 +49,7 @@ Json to_json(const SmoothReport& r) {
             d0.push_back(it.refit_energy_start());
             d1.push_back(it.refit_energy_end);
             steps.push_back(it.refit_steps);
+            evals.push_back(it.refit_evaluations);
         }
         if (it.mu > 0) mu.push_back(it.mu);
     }
@@ -56,7 +59,9 @@ Json to_json(const SmoothReport& r) {
         .set("normal_energy_start", Json::array(g0))
         .set("normal_energy", Json::array(g1))
         .set("refit_energy_start", Json::array(d0))
-        .set("refit_energy", Json::array(d1)).set("refit_steps", Json::array(steps));
+        .set("refit_energy", Json::array(d1)).set("refit_steps", Json::array(steps))
+        .set("refit_evaluations", Json::array(evals));
+    if (std::any_of(points.begin(), points.end(), [](std::size_t n) { return n > 0; })) j.set("filter_points", Json::array(points));
     if (!mu.empty()) j.set("mu", Json::array(mu));
     j.set("volume_shift", Json::array(shift)).set("roughness", Json::array(rough));
     j.set("stopped_unchanged", r.stopped_unchanged).set("stopped_smooth", r.stopped_smooth).set("seconds_normals", r.seconds_normals)

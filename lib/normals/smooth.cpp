@@ -141,6 +141,7 @@ void validate(const Volume& v, const SmoothOptions& opt) {
     if (!(opt.refit_dt > 0.0f) || !std::isfinite(opt.refit_dt))
         bad("refit_dt must be > 0, got " + std::to_string(opt.refit_dt));
     if (opt.refit_max_steps < 0) bad("refit_max_steps must be >= 0 (0: the mode's default), got " + std::to_string(opt.refit_max_steps));
+    if (opt.refit_super_steps < 0) bad("refit_super_steps must be >= 0 (0: explicit steps), got " + std::to_string(opt.refit_super_steps));
     if (!(opt.refit_tolerance >= 0.0)) bad("refit_tolerance must be >= 0");
     if (opt.conductance_presmooth_steps < 0) bad("conductance_presmooth_steps must be >= 0");
     if (!(opt.mu_robust >= 0.0f) || !std::isfinite(opt.mu_robust))

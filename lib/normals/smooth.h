@@ -41,6 +41,9 @@ constexpr bool is_neighbourhood_filter(SmoothMode m) {
 /// "bilateral", "guided", "tv".
 const char* to_string(SmoothMode mode);
 
+/// SmoothOptions::refit_super_steps' default.
+inline constexpr int kDefaultRefitSuperSteps = 6;
+
 /// Options of smooth_volume. Lengths and times are in voxel units (h = 1) unless stated.
 struct SmoothOptions {
     SmoothMode mode = SmoothMode::Anisotropic;
@@ -88,6 +91,13 @@ struct SmoothOptions {
                                  ///< filters (is_neighbourhood_filter) a refit time of kNeighbourhoodRefitTime·ℓ² (ℓ =
                                  ///< length_scale in voxels), at least 40: a surface wave an edge long
                                  ///< needs a time ∝ ℓ² to follow its filtered normals
+    int refit_super_steps = kDefaultRefitSuperSteps;  ///< >= 0, Bilateral, Guided, TotalVariation: the
+        ///< refit time refit_max_steps · refit_dt is covered in this many super steps of the
+        ///< Runge–Kutta–Legendre method of second order (Meyer, Balsara & Aslam 2014), each twice as
+        ///< long as the one before and of as many stages of the explicit rate (forward-Euler step
+        ///< refit_dt) as its stability needs: about √(time) evaluations instead of time/refit_dt
+        ///< (fandisk_n0.3 at 256: 160 instead of 702 over two iterations). D is evaluated, and the
+        ///< patient stop decided, once per super step. 0: the explicit steps of refit_dt (the default before version 0.2).
     double refit_tolerance = 1e-4;  ///< >= 0: the refit stops when D decreases by less than this
                                     ///< fraction of itself in one step (0: until D stops decreasing).
                                     ///< The surface-sample filters: when D has not reached a new low by this
@@ -109,6 +119,13 @@ struct SmoothOptions {
         ///< Resolution 256, anisotropic, mean normal error, fixed → 1.0: fandisk_n0.7 27.8° → 16.4°,
         ///< twelve_imp0.5 14.8° → 12.3°, fandisk_n0.3 8.25° → 8.25°, block_n0.4 9.71° → 9.66°
         ///< (1.5: 16.4°, –, –, 10.2°).
+    bool extend_by_gather = false;  ///< Bilateral, Guided: carry the filtered normals to the rest of the
+        ///< active band by evaluating one more filter pass at each sample's closest point (the
+        ///< default before version 0.2; six times the cost) instead of taking that pass's result at
+        ///< the surface sample nearest to the closest point
+    bool thin_samples = true;   ///< Bilateral, Guided: filter every s-th shell sample along each axis,
+        ///< s = ⌊length_scale / 5⌋ (1 at the automatic resolution), so that a finer grid costs no
+        ///< more per main iteration's filter; false: every one (the default before version 0.2)
     bool preserve_volume = true;  ///< Bilateral, Guided, TotalVariation: after each refit, shift φ by a constant so that
                                   ///< the enclosed volume is what it was before it (the refit of a
                                   ///< filtered normal map shrinks convex parts a little, −0.1…−1.4% on
@@ -157,7 +174,11 @@ struct SmoothIteration {
                                         ///< MeanCurvature)
     double refit_energy_end = 0;        ///< D at the end of the refit: the smallest D seen (a last step
                                         ///< that raised D is undone)
-    int refit_steps = 0;                ///< refit steps kept
+    int refit_steps = 0;                ///< refit steps kept (super steps under refit_super_steps)
+    int refit_evaluations = 0;          ///< evaluations of the refit's rate over the band: its explicit
+                                        ///< steps, or the stages of its super steps (the refit's cost)
+    std::size_t filter_points = 0;      ///< Bilateral, Guided, TotalVariation: the surface samples
+                                        ///< filtered (thin_samples), padding excluded
     float mu = 0;                       ///< Anisotropic: the conductance scale µ used (1/voxel); 0 for
                                         ///< the other modes
     float volume_shift = 0;             ///< voxels: the shift preserve_volume applied (positive: outwards)

@@ -15,11 +15,12 @@ struct PairRun {
     int n;
 };
 
-/// For each sample j of the run: w_j = exp(−ks·|p_j − q|² − kr·|r_j − rq|²) when |p_j − q|² <= r2,
+/// For each sample j of the runs runs[0 … count): w_j = exp(−ks·|p_j − q|² − kr·|r_j − rq|²) when |p_j − q|² <= r2,
 /// else 0; adds w_j·v_j to acc[0..7] (x), acc[8..15] (y), acc[16..23] (z) and w_j to
 /// acc[24..31], lane j mod 8. Each lane sums its samples in order, so the result is the same on
-/// every thread and at every vector width (the caller adds the lanes in a fixed order).
-void pair_sum(const PairRun& run, const float q[3], const float rq[3], float ks, float kr, float r2,
+/// every thread and at every vector width (the caller adds the lanes in a fixed order). A query's
+/// runs in one call pay the set-up once.
+void pair_sum(const PairRun* runs, int count, const float q[3], const float rq[3], float ks, float kr, float r2,
               float* __restrict acc);
 
 }  // namespace normalflow::engine

@@ -56,3 +56,28 @@ NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict h
 }
 
 }  // namespace normalflow::engine
+
+namespace normalflow::engine {
+
+NF_ROW_KERNEL int refit_rate_row(const float* __restrict P, const float* __restrict hn,
+                                 const std::uint8_t* __restrict m, int rows, float* __restrict out) {
+    int nonfinite = 0;
+    for (int r = 0; r < rows; ++r, P += L, hn += kBlockDim, m += kBlockDim, out += kBlockDim) {
+        std::int32_t mi[kBlockDim];
+        widen_mask(m, mi);
+        for (int x = 0; x < kBlockDim; ++x) {
+            float H = 0.0f, gp2 = 0.0f, gm2 = 0.0f;
+            refit_axis<kStride[0], kStride[1], kStride[2]>(P, x, H, gp2, gm2);
+            refit_axis<kStride[1], kStride[2], kStride[0]>(P, x, H, gp2, gm2);
+            refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2);
+            const float rhs = H - hn[x];
+            const float v = std::sqrt(rhs < 0.0f ? gp2 : gm2) * rhs;
+            const bool act = mi[x] != 0;
+            nonfinite |= int(act & !(std::abs(v) <= std::numeric_limits<float>::max()));
+            out[x] = act ? v : 0.0f;
+        }
+    }
+    return nonfinite;
+}
+
+}  // namespace normalflow::engine

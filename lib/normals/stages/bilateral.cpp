@@ -27,6 +27,9 @@ namespace {
 /// Samples with |φ| <= kShell are the point set the filters average (about 1.5 per voxel² of
 /// surface, each within 0.75 voxel of its closest point).
 constexpr float kShell = 0.75f;
+/// The filters take every s-th shell sample along each axis, s = ⌊ℓ / kStrideLength⌋ (ℓ the length
+/// scale in voxels): at the automatic resolution (ℓ about 5 voxels) all of them.
+constexpr float kStrideLength = 5.0f;
 /// The extension takes the filtered normals around a closest point only where the nearest surface
 /// sample's normal is within 45° of the sample's own.
 constexpr float kSameSide = 0.70710678f;
@@ -40,10 +43,39 @@ float lane_total(const float* acc) {
 void gather(const SurfaceSamples& S, std::int32_t b, const Samples (&r)[3], const Samples (&v)[3], const float q[3],
             const float rq[3], float ks, float kr, float r2, float (&acc)[32]) {
     std::fill(acc, acc + 32, 0.0f);
+    thread_local std::vector<PairRun> runs;
+    runs.clear();
     for (std::int32_t b2 : S.near(b)) {
         if (S.box_distance2(b2, q) > r2) continue;
-        pair_sum(S.run(b2, r, v), q, rq, ks, kr, r2, acc);
+        for (std::int32_t k = b2 * SurfaceSamples::kRuns; k < (b2 + 1) * SurfaceSamples::kRuns; ++k)
+            if (S.run_distance2(k, q) <= r2) runs.push_back(S.run(k, r, v));
     }
+    pair_sum(runs.data(), int(runs.size()), q, rq, ks, kr, r2, acc);
+}
+
+/// The same over the candidate runs of the query's run (SurfaceSamples::candidates).
+void gather(const SurfaceSamples& S, const std::vector<std::int32_t>& cand, const Samples (&r)[3],
+            const Samples (&v)[3], const float q[3], const float rq[3], float ks, float kr, float r2, float (&acc)[32]) {
+    std::fill(acc, acc + 32, 0.0f);
+    thread_local std::vector<PairRun> runs;
+    runs.clear();
+    for (std::int32_t run : cand)
+        if (S.run_distance2(run, q) <= r2) runs.push_back(S.run(run, r, v));
+    pair_sum(runs.data(), int(runs.size()), q, rq, ks, kr, r2, acc);
+}
+
+/// f(i, candidates of i's run) for every surface sample i (padding skipped) of the active blocks.
+template <class F>
+void for_samples(const Band& band, const SurfaceSamples& S, float reach, F&& f) {
+    band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
+        thread_local std::vector<std::int32_t> cand;
+        for (int k = 0; k < SurfaceSamples::kRuns; ++k) {
+            if (S.run_empty(b, k)) continue;
+            S.candidates(b, k, reach, cand);
+            for (std::size_t i = S.run_begin(b, k); i < S.run_end(b, k); ++i)
+                if (S.index[i] != SurfaceSamples::kPadding) f(i, cand);
+        }
+    });
 }
 
 /// (x, y, z) = the lane totals of acc normalised; false when they vanish.
@@ -76,7 +108,14 @@ public:
         const float r2 = radius * radius;
         const float ks = 1.0f / (2.0f * sigma_s * sigma_s);
         const float kr = 1.0f / (2.0f * c.opt.sigma_range * c.opt.sigma_range);
-        S_.build(band, w.normals, kShell, radius, c.opt.active_band);
+        // The points: every s-th shell sample along each axis, s = ⌊ℓ / kStrideLength⌋: about as
+        // many per ℓ² at any resolution, so that a finer grid costs no more here (total variation
+        // keeps them all: its graph joins grid neighbours).
+        const int stride = tv_ || !c.opt.thin_samples ? 1 : std::max(1, int(std::floor(ell / kStrideLength)));
+        S_.build(band, w.normals, kShell, radius, c.opt.active_band, stride);
+        c.record().filter_points = std::size_t(std::count_if(S_.index.begin(), S_.index.end(), [](std::size_t i) {
+            return i != SurfaceSamples::kPadding;
+        }));
         const std::size_t n = S_.size();
         for (int k = 0; k < 3; ++k) {
             copy_samples(S_.n[k], cur_[k]);
@@ -87,7 +126,6 @@ public:
             }
         }
         fit_samples(consistency_, n);  // the guidance's patch consistency; roughness's scratch
-        const std::vector<std::int32_t>& act = band.active();
 
         if (tv_) {  // normal_energy: the total-variation objective before and after its solve
             const float alpha = 1.0f / (c.opt.tv_lambda * ell);
@@ -102,48 +140,118 @@ public:
             c.ctl.poll();
             if (guided_) guidance(band, radius);
             const Samples(&range)[3] = guided_ ? guide_ : cur_;
-            band.for_blocks(act, 0, [&](std::size_t, std::int32_t b, Scratch&) {
-                float acc[32];
-                for (std::size_t i = S_.begin(b); i < S_.end(b); ++i) {
-                    if (S_.index[i] == SurfaceSamples::kPadding) continue;
-                    const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
-                    const float rq[3] = {range[0][i], range[1][i], range[2][i]};
-                    gather(S_, b, range, cur_, q, rq, ks, kr, r2, acc);
-                    float o[3];
-                    if (!normalised(acc, o))
-                        for (int k = 0; k < 3; ++k) o[k] = cur_[k][i];
-                    for (int k = 0; k < 3; ++k) next_[k][i] = o[k];
-                }
-            });
+            filter_pass(band, range, ks, kr, r2, next_);
             for (int k = 0; k < 3; ++k) std::swap(cur_[k], next_[k]);
             c.ctl.tick(0.5 * double(pass + 1) / c.opt.normal_steps);
         }
         c.record().roughness = roughness(band, ks, r2);
-        extend(c, ks, kr, r2);
+        if (c.opt.extend_by_gather)
+            extend(c, ks, kr, r2);
+        else
+            extend_nearest(c, ks, kr, r2);
         if (!tv_) energy.push_back(loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false));
         c.record().normal_energy = std::move(energy);
     }
 
 private:
+    /// One pass of the filter over the surface samples: out_i = normalised Σ_j w_ij cur_j, the
+    /// range weight on `range` (cur_ or the guidance), cur_i where the weights vanish.
+    void filter_pass(const Band& band, const Samples (&range)[3], float ks, float kr, float r2, Samples (&out)[3]) {
+        for_samples(band, S_, std::sqrt(r2), [&](std::size_t i, const std::vector<std::int32_t>& cand) {
+            float acc[32];
+            const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
+            const float rq[3] = {range[0][i], range[1][i], range[2][i]};
+            gather(S_, cand, range, cur_, q, rq, ks, kr, r2, acc);
+            float o[3];
+            if (!normalised(acc, o))
+                for (int k = 0; k < 3; ++k) o[k] = cur_[k][i];
+            for (int k = 0; k < 3; ++k) out[k][i] = o[k];
+        });
+    }
+
+    /// The surface sample nearest to q among the blocks near b within √best (the smallest index
+    /// among equally near ones, so the answer does not depend on the order the blocks are
+    /// visited in); kPadding when none is. The block holding q is searched first, so that the
+    /// others are mostly culled by their boxes.
+    std::size_t nearest_sample(const Band& band, std::int32_t b, const float q[3], float best) const {
+        std::size_t at = SurfaceSamples::kPadding;
+        auto scan = [&](std::int32_t b2) {
+            for (std::size_t j = S_.begin(b2); j < S_.end(b2); ++j) {
+                const float dx = S_.p[0][j] - q[0], dy = S_.p[1][j] - q[1], dz = S_.p[2][j] - q[2];
+                const float d2 = (dx * dx + dy * dy) + dz * dz;
+                if (d2 < best || (d2 == best && j < at)) {
+                    best = d2;
+                    at = j;
+                }
+            }
+        };
+        const auto cell = [](float v) { return int(std::floor(std::round(v) / float(kBlockDim))); };
+        const std::int32_t home = band.block_at(cell(q[0]), cell(q[1]), cell(q[2]));
+        const std::vector<std::int32_t>& near = S_.near(b);
+        const bool home_near = home >= 0 && std::binary_search(near.begin(), near.end(), home);
+        if (home_near) scan(home);
+        for (std::int32_t b2 : near)
+            if ((b2 != home || !home_near) && S_.box_distance2(b2, q) <= best) scan(b2);
+        return at;
+    }
+
+    /// The filtered normals into work().normals: each surface sample its own; every other active
+    /// sample x the result of one more pass of the filter at the surface sample nearest to its
+    /// closest point x − φ(x)N(x) (within the disc, and facing the same way as x's own normal;
+    /// otherwise x keeps N). extend() evaluates that pass at the closest point itself instead: the
+    /// same within the fraction of a voxel between the closest point and its nearest sample, at a
+    /// fraction of the cost.
+    void extend_nearest(StageContext& c, float ks, float kr, float r2) {
+        Band& band = c.band;
+        WorkBuffers& w = band.work();
+        const Samples& phi = band.phi();
+        const std::uint8_t* mask = band.mask();
+        const Samples(&range)[3] = guided_ ? guide_ : cur_;
+        filter_pass(band, range, ks, kr, r2, next_);
+        band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
+            const auto& bc = band.block_coord(std::size_t(b));
+            const std::size_t base = std::size_t(b) * kBlockVoxels;
+            for (int z = 0; z < kBlockDim; ++z)
+                for (int y = 0; y < kBlockDim; ++y)
+                    for (int x = 0; x < kBlockDim; ++x) {
+                        const std::size_t i = base + std::size_t(bidx(x, y, z));
+                        if (!mask[i] || S_.taken(band, std::size_t(b), x, y, z, phi[i])) continue;
+                        const float q[3] = {float(bc[0] * kBlockDim + x) - phi[i] * w.normals[0][i],
+                                            float(bc[1] * kBlockDim + y) - phi[i] * w.normals[1][i],
+                                            float(bc[2] * kBlockDim + z) - phi[i] * w.normals[2][i]};
+                        const std::size_t at = nearest_sample(band, b, q, r2);
+                        if (at == SurfaceSamples::kPadding) continue;  // nothing within reach: keep N
+                        // the nearest surface sample faces another way: keep N (see extend())
+                        if ((range[0][at] * w.normals[0][i] + range[1][at] * w.normals[1][i]) +
+                                range[2][at] * w.normals[2][i] <
+                            kSameSide)
+                            continue;
+                        for (int k = 0; k < 3; ++k) w.normals[k][i] = next_[k][at];
+                    }
+            for (std::size_t j = S_.begin(b); j < S_.end(b); ++j) {
+                const std::size_t i = S_.index[j];
+                if (i == SurfaceSamples::kPadding) continue;
+                for (int k = 0; k < 3; ++k) w.normals[k][i] = cur_[k][j];
+            }
+        });
+    }
+
     /// What the filter left: the 75th percentile over the surface samples of |N_i − M_i|, M_i the
     /// plain (spatial-only) Gaussian mean of the filtered normals over i's disc. Near 0 where the
     /// normal map is smooth at the disc's scale; creases (up to a quarter of the samples) do not
     /// count; noise that is left does.
     float roughness(const Band& band, float ks, float r2) {
         const std::size_t n = S_.size();
-        band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
+        std::fill(consistency_.begin(), consistency_.end(), -1.0f);
+        for_samples(band, S_, std::sqrt(r2), [&](std::size_t i, const std::vector<std::int32_t>& cand) {
             float acc[32];
-            for (std::size_t i = S_.begin(b); i < S_.end(b); ++i) {
-                consistency_[i] = -1.0f;
-                if (S_.index[i] == SurfaceSamples::kPadding) continue;
-                const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
-                const float rq[3] = {0, 0, 0};
-                gather(S_, b, cur_, cur_, q, rq, ks, 0.0f, r2, acc);
-                float o[3];
-                if (!normalised(acc, o)) continue;
-                const float dx = cur_[0][i] - o[0], dy = cur_[1][i] - o[1], dz = cur_[2][i] - o[2];
-                consistency_[i] = std::sqrt((dx * dx + dy * dy) + dz * dz);
-            }
+            const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
+            const float rq[3] = {0, 0, 0};
+            gather(S_, cand, cur_, cur_, q, rq, ks, 0.0f, r2, acc);
+            float o[3];
+            if (!normalised(acc, o)) return;
+            const float dx = cur_[0][i] - o[0], dy = cur_[1][i] - o[1], dz = cur_[2][i] - o[2];
+            consistency_[i] = std::sqrt((dx * dx + dy * dy) + dz * dz);
         });
         std::vector<float> v;
         v.reserve(n);
@@ -223,7 +331,7 @@ private:
                 for (int y = 0; y < kBlockDim; ++y)
                     for (int x = 0; x < kBlockDim; ++x) {
                         const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        if (!mask[i] || std::abs(phi[i]) <= kShell) continue;
+                        if (!mask[i] || S_.taken(band, std::size_t(b), x, y, z, phi[i])) continue;
                         const float q[3] = {float(bc[0] * kBlockDim + x) - phi[i] * w.normals[0][i],
                                             float(bc[1] * kBlockDim + y) - phi[i] * w.normals[1][i],
                                             float(bc[2] * kBlockDim + z) - phi[i] * w.normals[2][i]};

@@ -159,15 +159,188 @@ double refit_step(StageContext& c, bool with_energy) {
     return sum;
 }
 
+namespace {
+
+/// Each super step lasts this many times the one before: short ones first, where φ still moves
+/// fast (the first refit takes the noise out of it), long ones as it settles. On fandisk_n0.3 at
+/// resolution 256, 6 super steps, mean normal angle against the explicit refit's 4.86°: uniform
+/// 5.41°, 1.5 4.84°, 2 4.83°, 3 (4 steps) 4.92°.
+constexpr double kSuperStepGrowth = 2.0;
+
+/// The coefficients of an s-stage Runge–Kutta–Legendre super step of second order (Meyer,
+/// Balsara & Aslam 2014, Eq. 16–17): Y_1 = Y_0 + μ̃_1 τ L(Y_0); Y_j = μ_j Y_{j−1} + ν_j Y_{j−2} +
+/// (1 − μ_j − ν_j) Y_0 + μ̃_j τ L(Y_{j−1}) + γ̃_j τ L(Y_0). Stable for τ up to (s² + s − 2)/4
+/// forward-Euler steps.
+struct Rkl2 {
+    int s = 0;
+    std::vector<double> mu, nu, mut, gat;  // index j = 1 … s (mu[1], nu[1], gat[1] unused)
+    explicit Rkl2(int stages) : s(stages), mu(std::size_t(stages) + 1), nu(mu), mut(mu), gat(mu) {
+        auto b = [](int j) { return j <= 2 ? 1.0 / 3.0 : double(j * j + j - 2) / double(2 * j * (j + 1)); };
+        const double w1 = 4.0 / double(s * s + s - 2);
+        mut[1] = b(1) * w1;
+        for (int j = 2; j <= s; ++j) {
+            const auto J = std::size_t(j);
+            mu[J] = double(2 * j - 1) / j * b(j) / b(j - 1);
+            nu[J] = -double(j - 1) / j * b(j) / b(j - 2);
+            mut[J] = mu[J] * w1;
+            gat[J] = -(1.0 - b(j - 1)) * mut[J];
+        }
+    }
+};
+
+/// The fewest stages whose super step of length tau is stable with forward-Euler step dt.
+int rkl2_stages(double tau, double dt) {
+    int s = 2;
+    while (double(s * s + s - 2) / 4.0 * dt < tau) ++s;
+    return s;
+}
+
+/// One stage of the super step on the active samples: out = a·y1 + b·y2 + (1 − a − b)·y0 + ct·L(y1)
+/// + cg·m0 where the mask is set (y0 elsewhere is what every buffer holds there). The first stage
+/// (y2 = nullptr) also stores L(y0) into m0 and returns D(y0).
+double rkl2_stage(StageContext& c, const Samples& y1, const Samples* y2, const Samples& y0, Samples& m0, double a,
+                  double b, double ct, double cg, Samples& out) {
+    Band& band = c.band;
+    WorkBuffers& w = band.work();
+    const std::uint8_t* mask = band.mask();
+    const std::vector<std::int32_t>& active = band.active();
+    const bool first = y2 == nullptr;
+    std::vector<double> energy(active.size(), 0.0);
+    std::atomic<bool> bad{false};
+    const float fa = float(a), fb = float(b), f0 = float(1.0 - a - b), fct = float(ct), fcg = float(cg);
+    band.for_blocks(active, 2, [&](std::size_t k, std::int32_t blk, Scratch& s) {
+        float* P = s.at(0);
+        float* R = s.at(1);
+        gather_phi(band.neighbourhood(std::size_t(blk)), y1, P);
+        const std::size_t base = std::size_t(blk) * kBlockVoxels;
+        const std::uint8_t* M = mask + base;
+        double e = 0.0;
+        int nonfinite = 0;
+        for (int z = 0; z < kBlockDim; ++z) {
+            const auto [r0, r1] = row_span(0, [&](int y) { return any_in_row(M + bidx(0, y, z)); });
+            if (r1 < r0) continue;
+            const std::size_t i0 = base + std::size_t(bidx(0, r0, z));
+            const int n = (r1 - r0 + 1) * kBlockDim;
+            nonfinite |= refit_rate_row(P + lidx(0, r0, z), w.hn.data() + i0, mask + i0, r1 - r0 + 1, R);
+            const std::uint8_t* m = mask + i0;
+            float* o = out.data() + i0;
+            const float* Y0 = y0.data() + i0;
+            float* M0 = m0.data() + i0;
+            if (first) {
+                for (int q = 0; q < n; ++q) {
+                    if (m[q]) M0[q] = R[q];
+                    o[q] = m[q] ? Y0[q] + fct * R[q] : Y0[q];
+                }
+                for (int y = r0; y <= r1; ++y) {
+                    const std::size_t i = base + std::size_t(bidx(0, y, z));
+                    if (any_in_row(mask + i))
+                        e += refit_energy_row(P + lidx(0, y, z), mask + i, w.normals[0].data() + i,
+                                              w.normals[1].data() + i, w.normals[2].data() + i);
+                }
+            } else {
+                const float* Y1 = y1.data() + i0;
+                const float* Y2 = y2->data() + i0;
+                for (int q = 0; q < n; ++q)
+                    o[q] = m[q] ? ((fa * Y1[q] + fb * Y2[q]) + f0 * Y0[q]) + (fct * R[q] + fcg * M0[q]) : Y0[q];
+            }
+        }
+        if (nonfinite) bad = true;
+        energy[k] = e;
+    });
+    if (bad) c.ctl.fail("phi in the refit");
+    double sum = 0.0;
+    for (const double e : energy) sum += e;
+    return sum;
+}
+
+/// The refit time refit_max_steps · refit_dt in refit_super_steps super steps of the
+/// Runge–Kutta–Legendre method (second order): the explicit refit's flow with far fewer
+/// evaluations of its rate (stages ∝ √time instead of ∝ time). D is evaluated at the start of each
+/// super step; the patient stop of the explicit refit, counted in super steps.
+void refit_super_stepping(StageContext& c) {
+    WorkBuffers& w = c.band.work();
+    Samples& phi = c.band.phi();
+    const double dt = std::min(c.opt.refit_dt, kMaxDt);
+    const double total = double(c.opt.refit_max_steps) * dt;
+    const int n = c.opt.refit_super_steps;
+    const double growth = kSuperStepGrowth;
+    // super step k lasts tau0·growth^k; together they last `total`
+    const double tau0 = growth == 1.0 ? total / n : total * (growth - 1.0) / (std::pow(growth, n) - 1.0);
+    Samples& m0 = w.normals_next[0];
+    fit_samples(m0, phi.size());
+    Samples* ring[3] = {&w.phi_next, &w.normals_next[1], &w.normals_next[2]};
+    for (Samples* r : ring) copy_samples(phi, *r);
+    Samples& prev_phi = w.spare();
+    copy_samples(phi, prev_phi);
+    // the explicit refit's patience, as a time: a super step that ends that long after the lowest
+    // D without a new low stops the refit
+    const double patience_time = double(std::max(5, c.opt.refit_max_steps / 20)) * dt;
+    std::vector<double> ds;
+    double best = 0.0, prev = 0.0, d_end = 0.0, since_best = 0.0, tau_prev = 0.0;
+    int kept = 0;
+    bool stopped = false;
+    for (int step = 0; step < n; ++step) {
+        c.ctl.poll();
+        const double tau = tau0 * std::pow(growth, step);
+        const Rkl2 k(rkl2_stages(tau, dt));
+        // stage 1 from y0 = φ: into ring[0], L(φ) into m0, D(φ)
+        const double d = rkl2_stage(c, phi, nullptr, phi, m0, 0.0, 0.0, k.mut[1] * tau, 0.0, *ring[0]);
+        ++c.record().refit_evaluations;
+        ds.push_back(d);
+        if (step == 0 || d < best * (1.0 - c.opt.refit_tolerance)) {
+            best = step == 0 ? d : std::min(best, d);
+            since_best = 0.0;
+        } else {
+            since_best += tau_prev;
+        }
+        if (step > 0 && (since_best >= patience_time || d > 2.0 * best)) {
+            std::swap(phi, prev_phi);  // back to the start of the last super step
+            d_end = prev;
+            --kept;
+            stopped = true;
+            break;
+        }
+        tau_prev = tau;
+        // stages 2 … s: ring[0] = Y_{j−1}, ring[1] = Y_{j−2} (Y_0 = φ at j = 2), ring[2] = Y_j
+        for (int j = 2; j <= k.s; ++j) {
+            const auto J = std::size_t(j);
+            const Samples& y2 = j == 2 ? phi : *ring[1];
+            rkl2_stage(c, *ring[0], &y2, phi, m0, k.mu[J], k.nu[J], k.mut[J] * tau, k.gat[J] * tau, *ring[2]);
+            ++c.record().refit_evaluations;
+            std::swap(ring[1], ring[0]);  // ring[1] = Y_{j−1}
+            std::swap(ring[0], ring[2]);  // ring[0] = Y_j
+        }
+        std::swap(prev_phi, phi);    // prev_phi = this super step's start
+        std::swap(phi, *ring[0]);    // φ = Y_s; ring[0] holds an old iterate (equal off the mask)
+        ++kept;
+        prev = d;
+        c.ctl.tick(0.5 + 0.5 * double(step + 1) / n);
+    }
+    if (!stopped) {
+        d_end = refit_energy(c);
+        ds.push_back(d_end);
+    }
+    SmoothIteration& r = c.record();
+    r.refit_energy = std::move(ds);
+    r.refit_energy_end = d_end;
+    r.refit_steps = kept;
+}
+
+}  // namespace
+
 /// Refit steps until D stops decreasing; φ ends as the iterate with the smallest D seen.
 /// Buffers: phi (current), w.phi_next (written by the step), w.spare() (the previous iterate, kept
 /// so that a step that raised D can be undone; the buffer the reinitialisation has already
 /// written, so no fresh pages are touched). Samples outside the active blocks are equal in
 /// all three (refit_step writes only the active blocks).
 void refit_to_normals(StageContext& c) {
+    target_curvature(c);  // may use w.phi_next as scratch
+    if (c.opt.refit_super_steps > 0 && is_neighbourhood_filter(c.opt.mode)) {
+        refit_super_stepping(c);
+        return;
+    }
     WorkBuffers& w = c.band.work();
     Samples& phi = c.band.phi();
-    target_curvature(c);  // may use w.phi_next as scratch
     copy_samples(phi, w.phi_next);
     Samples& prev_phi = w.spare();
     copy_samples(phi, prev_phi);
@@ -187,6 +360,7 @@ void refit_to_normals(StageContext& c) {
     for (int s = 0; s < c.opt.refit_max_steps; ++s) {
         std::swap(w.phi_next, prev_phi);  // prev_phi ← φ_{s−1}; w.phi_next is overwritten by the step
         const double d = refit_step(c, true);  // D(φ_s); now w.phi_next = φ_s, phi = φ_{s+1}
+        ++c.record().refit_evaluations;
         ds.push_back(d);
         c.ctl.tick(0.5 + 0.5 * double(s + 1) / c.opt.refit_max_steps);
         if (patient) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "band/iterate.h"
 
@@ -11,57 +12,86 @@ namespace {
 constexpr float kFar = 1.0e9f;  // padding position: no query is within reach of it
 }
 
-void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, float reach, float margin) {
-    band_ = &band;
-    tau_ = tau;
+void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, float reach, float margin, int stride) {
+    stride_ = std::max(1, stride);
+    tau_ = tau * float(stride_);
+    tau = tau_;
     const std::size_t nb = band.nblocks();
     const Samples& phi = band.phi();
     const std::uint8_t* mask = band.mask();
-    // counts per block, then offsets (slot order), then fill: each block independently
-    std::vector<std::int64_t> count(nb, 0);
+    constexpr int kHalf = kBlockDim / 2;
+    // the samples of octant k of a block, in z, y, x order
+    const auto octant = [&](int k, auto&& f) {
+        const int x0 = (k & 1) * kHalf, y0 = ((k >> 1) & 1) * kHalf, z0 = (k >> 2) * kHalf;
+        for (int z = z0; z < z0 + kHalf; ++z)
+            for (int y = y0; y < y0 + kHalf; ++y)
+                for (int x = x0; x < x0 + kHalf; ++x) f(x, y, z);
+    };
+    // counts per run, then offsets (slot order), then fill: each block independently
+    std::vector<std::int64_t> count(nb * kRuns, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
-            std::int64_t k = 0;
             const std::size_t base = b * kBlockVoxels;
-            for (std::size_t i = base; i < base + kBlockVoxels; ++i) k += (mask[i] && std::abs(phi[i]) <= tau) ? 1 : 0;
-            count[b] = (k + 7) / 8 * 8;
+            for (int k = 0; k < kRuns; ++k) {
+                std::int64_t n = 0;
+                octant(k, [&](int x, int y, int z) {
+                    const std::size_t i = base + std::size_t(bidx(x, y, z));
+                    n += mask[i] && taken(band, b, x, y, z, phi[i]) ? 1 : 0;
+                });
+                count[b * kRuns + std::size_t(k)] = (n + 7) / 8 * 8;
+            }
         }
     });
-    off_.assign(nb + 1, 0);
-    for (std::size_t b = 0; b < nb; ++b) off_[b + 1] = off_[b] + count[b];
-    const std::size_t total = std::size_t(off_[nb]);
+    off_.assign(nb * kRuns + 1, 0);
+    for (std::size_t r = 0; r < nb * kRuns; ++r) off_[r + 1] = off_[r] + count[r];
+    const std::size_t total = std::size_t(off_[nb * kRuns]);
     for (int c = 0; c < 3; ++c) {
         fit_samples(p[c], total);
         fit_samples(n[c], total);
     }
     index.resize(total);
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    box_lo_.assign(nb * (kRuns + 1), {kInf, kInf, kInf});
+    box_hi_.assign(nb * (kRuns + 1), {-kInf, -kInf, -kInf});
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
-            std::size_t o = std::size_t(off_[b]);
-            const std::size_t e = std::size_t(off_[b + 1]);
             const auto& bc = band.block_coord(b);
             const std::size_t base = b * kBlockVoxels;
-            for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y)
-                    for (int x = 0; x < kBlockDim; ++x) {
-                        const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        if (!(mask[i] && std::abs(phi[i]) <= tau)) continue;
-                        const float nx = normals[0][i], ny = normals[1][i], nz = normals[2][i];
-                        p[0][o] = float(bc[0] * kBlockDim + x) - phi[i] * nx;
-                        p[1][o] = float(bc[1] * kBlockDim + y) - phi[i] * ny;
-                        p[2][o] = float(bc[2] * kBlockDim + z) - phi[i] * nz;
-                        n[0][o] = nx;
-                        n[1][o] = ny;
-                        n[2][o] = nz;
-                        index[o] = i;
-                        ++o;
+            std::array<float, 3>& blo = box_lo_[b * (kRuns + 1) + kRuns];
+            std::array<float, 3>& bhi = box_hi_[b * (kRuns + 1) + kRuns];
+            for (int k = 0; k < kRuns; ++k) {
+                std::size_t o = std::size_t(off_[b * kRuns + std::size_t(k)]);
+                const std::size_t e = std::size_t(off_[b * kRuns + std::size_t(k) + 1]);
+                std::array<float, 3>& lo = box_lo_[b * (kRuns + 1) + std::size_t(k)];
+                std::array<float, 3>& hi = box_hi_[b * (kRuns + 1) + std::size_t(k)];
+                octant(k, [&](int x, int y, int z) {
+                    const std::size_t i = base + std::size_t(bidx(x, y, z));
+                    if (!(mask[i] && taken(band, b, x, y, z, phi[i]))) return;
+                    const float nx = normals[0][i], ny = normals[1][i], nz = normals[2][i];
+                    p[0][o] = float(bc[0] * kBlockDim + x) - phi[i] * nx;
+                    p[1][o] = float(bc[1] * kBlockDim + y) - phi[i] * ny;
+                    p[2][o] = float(bc[2] * kBlockDim + z) - phi[i] * nz;
+                    n[0][o] = nx;
+                    n[1][o] = ny;
+                    n[2][o] = nz;
+                    index[o] = i;
+                    for (std::size_t a = 0; a < 3; ++a) {
+                        lo[a] = std::min(lo[a], p[a][o]);
+                        hi[a] = std::max(hi[a], p[a][o]);
                     }
-            for (; o < e; ++o) {
-                for (int c = 0; c < 3; ++c) {
-                    p[c][o] = kFar;
-                    n[c][o] = 0.0f;
+                    ++o;
+                });
+                for (; o < e; ++o) {
+                    for (int c = 0; c < 3; ++c) {
+                        p[c][o] = kFar;
+                        n[c][o] = 0.0f;
+                    }
+                    index[o] = kPadding;
                 }
-                index[o] = kPadding;
+                for (std::size_t a = 0; a < 3; ++a) {
+                    blo[a] = std::min(blo[a], lo[a]);
+                    bhi[a] = std::max(bhi[a], hi[a]);
+                }
             }
         }
     });
@@ -79,7 +109,7 @@ void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, f
                 for (int dy = -k; dy <= k; ++dy)
                     for (int dx = -k; dx <= k; ++dx) {
                         const std::int32_t s = band.block_at(bc[0] + dx, bc[1] + dy, bc[2] + dz);
-                        if (s < 0 || off_[std::size_t(s) + 1] == off_[std::size_t(s)]) continue;
+                        if (s < 0 || off_[(std::size_t(s) + 1) * kRuns] == off_[std::size_t(s) * kRuns]) continue;
                         // gap between the two 8-sample boxes along each axis
                         const auto gap = [](int d) { return float(std::max(0, std::abs(d) * kBlockDim - (kBlockDim - 1))); };
                         const float gx = gap(dx), gy = gap(dy), gz = gap(dz);
@@ -88,17 +118,6 @@ void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, f
             std::sort(out.begin(), out.end());
         }
     });
-}
-
-float SurfaceSamples::box_distance2(std::int32_t b, const float q[3]) const {
-    const auto& bc = band_->block_coord(std::size_t(b));
-    float d2 = 0.0f;
-    for (int a = 0; a < 3; ++a) {
-        const float lo = float(bc[a] * kBlockDim) - tau_, hi = float(bc[a] * kBlockDim + kBlockDim - 1) + tau_;
-        const float d = q[a] < lo ? lo - q[a] : (q[a] > hi ? q[a] - hi : 0.0f);
-        d2 += d * d;
-    }
-    return d2;
 }
 
 }  // namespace normalflow::engine

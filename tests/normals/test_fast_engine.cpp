@@ -1,0 +1,193 @@
+// Tests of the engine's speed-ups of the neighbourhood filters (issue 21), each against the slower
+// way it replaces, on the same noisy volumes: the refit in Runge–Kutta–Legendre super steps
+// against the explicit steps, the filtered normals carried off the surface by nearest sample
+// against a filter pass at every closest point, and the thinned surface samples of a fine grid
+// against all of them. Each must give the same surface (within a small fraction of a voxel) for
+// far less work, counted, not timed (SmoothIteration::refit_evaluations, filter_points).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "core/errors.h"
+#include "extract/extract_surface.h"
+#include "normals/smooth.h"
+#include "volume_fixtures.h"
+
+namespace normalflow {
+namespace {
+
+using test::add_noise;
+using test::box_normal_error;
+using test::box_sdf;
+using test::BoxNormalError;
+using test::make_volume;
+using test::sphere_sdf;
+
+/// Mean and largest |φ_a − φ_b| (voxels) over the grid samples within one voxel of a's surface.
+struct PhiDifference {
+    double mean = 0, max = 0;
+};
+PhiDifference phi_difference(const Volume& a, const Volume& b) {
+    PhiDifference d;
+    std::size_t n = 0;
+    const double h = a.grid.voxel_size;
+    for (int k = 0; k < a.grid.dims[2]; ++k)
+        for (int j = 0; j < a.grid.dims[1]; ++j)
+            for (int i = 0; i < a.grid.dims[0]; ++i) {
+                const double va = a.value(i, j, k) / h;
+                if (std::abs(va) >= 1.0) continue;
+                const double e = std::abs(va - b.value(i, j, k) / h);
+                d.mean += e;
+                d.max = std::max(d.max, e);
+                ++n;
+            }
+    if (n > 0) d.mean /= double(n);
+    return d;
+}
+
+SmoothOptions bilateral(float length_scale) {
+    SmoothOptions o;
+    o.mode = SmoothMode::Bilateral;
+    o.length_scale = length_scale;
+    return o;
+}
+
+/// The noisy box of the filter tests: 0.3 voxel of noise per sample on a 40³ grid.
+Volume noisy_box(double h = 1.0, std::uint32_t seed = 5u) {
+    const Vec3d c(20.3, 19.6, 20.2), e(11, 9, 10);
+    Volume v = make_volume(int(std::lround(40 / h)), h, box_sdf(c, e));
+    add_noise(v, 0.3, seed);
+    return v;
+}
+
+TEST(FastEngine, SuperStepsFollowTheExplicitRefitForAFractionOfItsWork) {
+    const Vec3d c(20.3, 19.6, 20.2), e(11, 9, 10);
+    const Volume v0 = noisy_box();
+    Volume expl = v0, rkl = v0;
+    SmoothOptions o = bilateral(5.0f);  // ℓ = 5 voxels, as at the automatic resolution: 350 steps
+    o.refit_super_steps = 0;
+    const SmoothReport re = smooth_volume(expl, o);
+    o.refit_super_steps = kDefaultRefitSuperSteps;
+    const SmoothReport rr = smooth_volume(rkl, o);
+    ASSERT_EQ(re.iterations_run(), rr.iterations_run());
+    int ne = 0, nr = 0;
+    for (const SmoothIteration& it : re.iterations) ne += it.refit_evaluations;
+    for (const SmoothIteration& it : rr.iterations) {
+        nr += it.refit_evaluations;
+        EXPECT_LE(it.refit_steps, kDefaultRefitSuperSteps);
+    }
+    const PhiDifference d = phi_difference(expl, rkl);
+    const BoxNormalError ee = box_normal_error(extract_surface(expl), c, e, 2.5);
+    const BoxNormalError er = box_normal_error(extract_surface(rkl), c, e, 2.5);
+    const BoxNormalError e0 = box_normal_error(extract_surface(v0), c, e, 2.5);
+    std::printf("refit: explicit %d evaluations, super steps %d; |Δφ| mean %.4f max %.4f voxel; normal error "
+                "(deg) near edges / on faces: noisy %.2f / %.2f, explicit %.2f / %.2f, super steps %.2f / %.2f\n",
+                ne, nr, d.mean, d.max, e0.near_edges, e0.on_faces, ee.near_edges, ee.on_faces, er.near_edges,
+                er.on_faces);
+    EXPECT_LT(nr * 3, ne);        // a third of the work at most
+    EXPECT_LT(d.mean, 0.02);      // the same surface (up to a few samples at the edges)...
+    EXPECT_LT(d.max, 0.5);
+    EXPECT_LT(std::abs(er.on_faces - ee.on_faces), 0.25);  // ...and the same quality
+    EXPECT_LT(std::abs(er.near_edges - ee.near_edges), 0.5);
+    EXPECT_LT(er.on_faces, 0.5 * e0.on_faces);
+}
+
+TEST(FastEngine, SuperStepsKeepASphere) {
+    // A clean sphere through two main iterations: the super steps keep its radius and its shape
+    // as the explicit steps do (a wrong coefficient would blow it up or shrink it).
+    const Vec3d c(24.3, 23.8, 24.1);
+    const Volume v0 = make_volume(48, 1.0, sphere_sdf(c, 14.0));
+    const double r0 = test::equivalent_radius(v0);
+    double r[2], dev[2];
+    for (int k = 0; k < 2; ++k) {
+        Volume v = v0;
+        SmoothOptions o = bilateral(4.0f);
+        o.iterations = 2;
+        o.refit_super_steps = k == 0 ? 0 : kDefaultRefitSuperSteps;
+        smooth_volume(v, o);
+        r[k] = test::equivalent_radius(v);
+        dev[k] = test::radial_stats(v, c).max_deviation;
+    }
+    std::printf("sphere r %.4f: explicit refit r %.4f, max radial deviation %.4f; super steps r %.4f, %.4f\n", r0,
+                r[0], dev[0], r[1], dev[1]);
+    EXPECT_LT(std::abs(r[1] - r0), 0.05);
+    EXPECT_LT(std::abs(r[1] - r[0]), 0.01);
+    EXPECT_LT(dev[1], dev[0] + 0.05);
+    EXPECT_LT(dev[1], 0.3);
+}
+
+TEST(FastEngine, NearestSampleExtensionMatchesTheGather) {
+    const Vec3d c(20.3, 19.6, 20.2), e(11, 9, 10);
+    const Volume v0 = noisy_box(1.0, 9u);
+    Volume gather = v0, nearest = v0;
+    SmoothOptions o = bilateral(4.0f);
+    o.extend_by_gather = true;
+    smooth_volume(gather, o);
+    o.extend_by_gather = false;
+    smooth_volume(nearest, o);
+    const PhiDifference d = phi_difference(gather, nearest);
+    const BoxNormalError eg = box_normal_error(extract_surface(gather), c, e, 2.5);
+    const BoxNormalError en = box_normal_error(extract_surface(nearest), c, e, 2.5);
+    std::printf("extension: |Δφ| mean %.4f max %.4f voxel; normal error near edges / on faces: gather %.2f / %.2f, "
+                "nearest %.2f / %.2f\n",
+                d.mean, d.max, eg.near_edges, eg.on_faces, en.near_edges, en.on_faces);
+    EXPECT_LT(d.mean, 0.03);
+    EXPECT_LT(std::abs(en.on_faces - eg.on_faces), 0.25);
+    EXPECT_LT(std::abs(en.near_edges - eg.near_edges), 0.5);
+}
+
+TEST(FastEngine, ThinnedSamplesOfAFineGridGiveTheSameSurface) {
+    // The noisy box at h = 1/2 with a length scale of 5 world units (10 voxels): every second shell
+    // sample along each axis is filtered, about a quarter of them, and the surface is the one all
+    // of them give.
+    const Vec3d c(20.3, 19.6, 20.2), e(11, 9, 10);
+    const Volume v0 = noisy_box(0.5, 13u);
+    Volume all = v0, thin = v0;
+    SmoothOptions o = bilateral(10.0f);
+    o.iterations = 1;
+    o.thin_samples = false;
+    const SmoothReport ra = smooth_volume(all, o);
+    o.thin_samples = true;
+    const SmoothReport rt = smooth_volume(thin, o);
+    const std::size_t na = ra.iterations[0].filter_points, nt = rt.iterations[0].filter_points;
+    const PhiDifference d = phi_difference(all, thin);
+    const BoxNormalError ea = box_normal_error(extract_surface(all), c, e, 2.5);
+    const BoxNormalError et = box_normal_error(extract_surface(thin), c, e, 2.5);
+    std::printf("thinned samples: %zu of %zu; |Δφ| mean %.4f max %.4f voxel; normal error near edges / on faces: "
+                "all %.2f / %.2f, thinned %.2f / %.2f\n",
+                nt, na, d.mean, d.max, ea.near_edges, ea.on_faces, et.near_edges, et.on_faces);
+    EXPECT_GT(nt * 6, na);  // about a quarter (the shell is twice as thick, a quarter of its columns)
+    EXPECT_LT(nt * 3, na);
+    EXPECT_LT(d.mean, 0.06);  // voxels of h/2
+    EXPECT_LT(std::abs(et.on_faces - ea.on_faces), 0.25);
+    EXPECT_LT(std::abs(et.near_edges - ea.near_edges), 0.5);
+}
+
+TEST(FastEngine, SpeedUpsDoNotDependOnTheThreads) {
+    // The default path (super steps, nearest extension) and the thinned samples, bit for bit.
+    for (const float ell : {4.0f, 10.0f}) {
+        const Volume v = noisy_box(ell > 5.0f ? 0.5 : 1.0, 3u);
+        Volume v1 = v, v2 = v;
+        SmoothOptions o = bilateral(ell);
+        o.iterations = 1;
+        o.threads = 1;
+        smooth_volume(v1, o);
+        o.threads = 2;
+        smooth_volume(v2, o);
+        ASSERT_EQ(v1.values.size(), v2.values.size());
+        EXPECT_EQ(0, std::memcmp(v1.values.data(), v2.values.data(), v1.values.size() * sizeof(float))) << ell;
+    }
+}
+
+TEST(FastEngine, NegativeSuperStepsAreRefused) {
+    Volume v = make_volume(24, 1.0, sphere_sdf(Vec3d(12, 12, 12), 6.0));
+    SmoothOptions o = bilateral(4.0f);
+    o.refit_super_steps = -1;
+    EXPECT_THROW(smooth_volume(v, o), InvalidInput);
+}
+
+}  // namespace
+}  // namespace normalflow
