@@ -5,24 +5,25 @@
 
 namespace normalflow::engine {
 
-NF_ROW_KERNEL void pair_sum(const PairRun* runs, int count, const float q[3], const float rq[3], float ks, float kr,
-                            float r2, float* __restrict acc) {
+NF_ROW_KERNEL void pair_sum(const PairArrays& a, const PairSpan* spans, int count, const float q[3], const float rq[3],
+                            float ks, float kr, float r2, float* __restrict acc) {
     const float qx = q[0], qy = q[1], qz = q[2];
     const float sx = rq[0], sy = rq[1], sz = rq[2];
     float ax[8], ay[8], az[8], aw[8];
     for (int l = 0; l < 8; ++l) ax[l] = ay[l] = az[l] = aw[l] = 0.0f;
     for (int k = 0; k < count; ++k) {
-        const PairRun& run = runs[k];
-        const float* __restrict px = run.p[0];
-        const float* __restrict py = run.p[1];
-        const float* __restrict pz = run.p[2];
-        const float* __restrict rx = run.r[0];
-        const float* __restrict ry = run.r[1];
-        const float* __restrict rz = run.r[2];
-        const float* __restrict vx = run.v[0];
-        const float* __restrict vy = run.v[1];
-        const float* __restrict vz = run.v[2];
-        for (int j0 = 0; j0 < run.n; j0 += 8)
+        const std::int64_t o = spans[k].begin;
+        const int n = int(spans[k].n);
+        const float* __restrict px = a.p[0] + o;
+        const float* __restrict py = a.p[1] + o;
+        const float* __restrict pz = a.p[2] + o;
+        const float* __restrict rx = a.r[0] + o;
+        const float* __restrict ry = a.r[1] + o;
+        const float* __restrict rz = a.r[2] + o;
+        const float* __restrict vx = a.v[0] + o;
+        const float* __restrict vy = a.v[1] + o;
+        const float* __restrict vz = a.v[2] + o;
+        for (int j0 = 0; j0 < n; j0 += 8)
             for (int l = 0; l < 8; ++l) {
                 const int j = j0 + l;
                 const float dx = px[j] - qx, dy = py[j] - qy, dz = pz[j] - qz;

@@ -43,35 +43,64 @@ float lane_total(const float* acc) {
 void gather(const SurfaceSamples& S, std::int32_t b, const Samples (&r)[3], const Samples (&v)[3], const float q[3],
             const float rq[3], float ks, float kr, float r2, float (&acc)[32]) {
     std::fill(acc, acc + 32, 0.0f);
-    thread_local std::vector<PairRun> runs;
-    runs.clear();
+    thread_local std::vector<PairSpan> spans;
+    spans.clear();
     for (std::int32_t b2 : S.near(b)) {
         if (S.box_distance2(b2, q) > r2) continue;
         for (std::int32_t k = b2 * SurfaceSamples::kRuns; k < (b2 + 1) * SurfaceSamples::kRuns; ++k)
-            if (S.run_distance2(k, q) <= r2) runs.push_back(S.run(k, r, v));
+            if (S.run_distance2(k, q) <= r2) spans.push_back(S.span(k));
     }
-    pair_sum(runs.data(), int(runs.size()), q, rq, ks, kr, r2, acc);
+    pair_sum(S.arrays(r, v), spans.data(), int(spans.size()), q, rq, ks, kr, r2, acc);
 }
 
-/// The same over the candidate runs of the query's run (SurfaceSamples::candidates).
-void gather(const SurfaceSamples& S, const std::vector<std::int32_t>& cand, const Samples (&r)[3],
-            const Samples (&v)[3], const float q[3], const float rq[3], float ks, float kr, float r2, float (&acc)[32]) {
+/// The candidate runs of the queries of one run (SurfaceSamples::candidates): their spans and
+/// boxes (struct of arrays, so that the test of each query against them vectorises).
+struct Candidates {
+    std::vector<std::int32_t> runs;
+    std::vector<PairSpan> spans, selected;
+    std::vector<float> lo[3], hi[3];
+    void set(const SurfaceSamples& S) {
+        spans.clear();
+        for (int a = 0; a < 3; ++a) {
+            lo[a].clear();
+            hi[a].clear();
+        }
+        for (const std::int32_t r : runs) {
+            spans.push_back(S.span(r));
+            for (std::size_t a = 0; a < 3; ++a) {
+                lo[a].push_back(S.run_lo(r)[a]);
+                hi[a].push_back(S.run_hi(r)[a]);
+            }
+        }
+        selected.resize(spans.size());
+    }
+};
+
+/// The same over the candidates of the query's run.
+void gather(const SurfaceSamples& S, Candidates& c, const Samples (&r)[3], const Samples (&v)[3], const float q[3],
+            const float rq[3], float ks, float kr, float r2, float (&acc)[32]) {
     std::fill(acc, acc + 32, 0.0f);
-    thread_local std::vector<PairRun> runs;
-    runs.clear();
-    for (std::int32_t run : cand)
-        if (S.run_distance2(run, q) <= r2) runs.push_back(S.run(run, r, v));
-    pair_sum(runs.data(), int(runs.size()), q, rq, ks, kr, r2, acc);
+    const std::size_t m = c.spans.size();
+    int k = 0;
+    for (std::size_t j = 0; j < m; ++j) {
+        const float dx = std::max({c.lo[0][j] - q[0], q[0] - c.hi[0][j], 0.0f});
+        const float dy = std::max({c.lo[1][j] - q[1], q[1] - c.hi[1][j], 0.0f});
+        const float dz = std::max({c.lo[2][j] - q[2], q[2] - c.hi[2][j], 0.0f});
+        c.selected[std::size_t(k)] = c.spans[j];
+        k += (dx * dx + dy * dy) + dz * dz <= r2 ? 1 : 0;
+    }
+    pair_sum(S.arrays(r, v), c.selected.data(), k, q, rq, ks, kr, r2, acc);
 }
 
 /// f(i, candidates of i's run) for every surface sample i (padding skipped) of the active blocks.
 template <class F>
 void for_samples(const Band& band, const SurfaceSamples& S, float reach, F&& f) {
     band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
-        thread_local std::vector<std::int32_t> cand;
+        thread_local Candidates cand;
         for (int k = 0; k < SurfaceSamples::kRuns; ++k) {
             if (S.run_empty(b, k)) continue;
-            S.candidates(b, k, reach, cand);
+            S.candidates(b, k, reach, cand.runs);
+            cand.set(S);
             for (std::size_t i = S.run_begin(b, k); i < S.run_end(b, k); ++i)
                 if (S.index[i] != SurfaceSamples::kPadding) f(i, cand);
         }
@@ -157,7 +186,7 @@ private:
     /// One pass of the filter over the surface samples: out_i = normalised Σ_j w_ij cur_j, the
     /// range weight on `range` (cur_ or the guidance), cur_i where the weights vanish.
     void filter_pass(const Band& band, const Samples (&range)[3], float ks, float kr, float r2, Samples (&out)[3]) {
-        for_samples(band, S_, std::sqrt(r2), [&](std::size_t i, const std::vector<std::int32_t>& cand) {
+        for_samples(band, S_, std::sqrt(r2), [&](std::size_t i, Candidates& cand) {
             float acc[32];
             const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
             const float rq[3] = {range[0][i], range[1][i], range[2][i]};
@@ -243,7 +272,7 @@ private:
     float roughness(const Band& band, float ks, float r2) {
         const std::size_t n = S_.size();
         std::fill(consistency_.begin(), consistency_.end(), -1.0f);
-        for_samples(band, S_, std::sqrt(r2), [&](std::size_t i, const std::vector<std::int32_t>& cand) {
+        for_samples(band, S_, std::sqrt(r2), [&](std::size_t i, Candidates& cand) {
             float acc[32];
             const float q[3] = {S_.p[0][i], S_.p[1][i], S_.p[2][i]};
             const float rq[3] = {0, 0, 0};

@@ -81,20 +81,26 @@ public:
     float run_distance2(std::int32_t r, const float q[3]) const {
         return box_d2(std::size_t(r / kRuns) * (kRuns + 1) + std::size_t(r % kRuns), q);
     }
-    /// Run r (b·kRuns + k) with range values rv and values v (arrays of size()).
-    PairRun run(std::int32_t r, const Samples (&rv)[3], const Samples (&v)[3]) const {
-        const std::size_t o = std::size_t(off_[std::size_t(r)]);
-        return PairRun{{p[0].data() + o, p[1].data() + o, p[2].data() + o},
-                       {rv[0].data() + o, rv[1].data() + o, rv[2].data() + o},
-                       {v[0].data() + o, v[1].data() + o, v[2].data() + o},
-                       int(off_[std::size_t(r) + 1] - off_[std::size_t(r)])};
+    /// The samples of run r (b·kRuns + k).
+    PairSpan span(std::int32_t r) const {
+        return PairSpan{off_[std::size_t(r)], off_[std::size_t(r) + 1] - off_[std::size_t(r)]};
     }
+    /// The points with range values rv and values v (arrays of size()).
+    PairArrays arrays(const Samples (&rv)[3], const Samples (&v)[3]) const {
+        return PairArrays{{p[0].data(), p[1].data(), p[2].data()},
+                          {rv[0].data(), rv[1].data(), rv[2].data()},
+                          {v[0].data(), v[1].data(), v[2].data()}};
+    }
+    /// The box of run r: lo, hi.
+    const std::array<float, 3>& run_lo(std::int32_t r) const { return box_lo_[box_of(r)]; }
+    const std::array<float, 3>& run_hi(std::int32_t r) const { return box_hi_[box_of(r)]; }
 
     Samples p[3];                    ///< closest points, voxel coordinates of the grid
     Samples n[3];                    ///< normals
     std::vector<std::size_t> index;  ///< the band sample of each, kPadding for padding
 
 private:
+    static std::size_t box_of(std::int32_t r) { return std::size_t(r / kRuns) * (kRuns + 1) + std::size_t(r % kRuns); }
     float box_d2(std::size_t box, const float q[3]) const {
         const float* lo = box_lo_[box].data();
         const float* hi = box_hi_[box].data();

@@ -60,6 +60,33 @@ TEST(RefitRow, SameAsScalarLoop) {
     }
 }
 
+TEST(RefitRateRow, IsTheStepOverDtAndZeroOffTheMask) {
+    // The super steps' rate: the explicit step's increment per unit time, at the active samples.
+    for (unsigned seed = 1; seed <= 20; ++seed) {
+        std::mt19937 rng(seed);
+        const std::vector<float> P = test::padded_phi(rng, seed % 2 ? 0.3f : 1.5f);
+        const std::vector<float> hn = test::uniform(rng, kBlockVoxels, -0.5f, 0.5f);
+        const std::vector<std::uint8_t> m = test::random_mask(rng, 0.6);
+        std::vector<float> got(kBlockVoxels, -9.0f);
+        int nonfinite = 0;
+        for (int z = 0; z < kBlockDim; ++z)
+            nonfinite |= refit_rate_row(P.data() + lidx(0, 0, z), hn.data() + bidx(0, 0, z), m.data() + bidx(0, 0, z),
+                                        kBlockDim, got.data() + bidx(0, 0, z));
+        EXPECT_EQ(nonfinite, 0);
+        for (int z = 0; z < kBlockDim; ++z)
+            for (int y = 0; y < kBlockDim; ++y)
+                for (int x = 0; x < kBlockDim; ++x) {
+                    const int q = lidx(x, y, z), i = bidx(x, y, z);
+                    if (!m[i]) {
+                        ASSERT_EQ(got[i], 0.0f);
+                        continue;
+                    }
+                    const float rate = (refit_sample(P.data(), q, hn[i], 1.0f) - P[q]);
+                    ASSERT_NEAR(got[i], rate, 1e-5f * (1.0f + std::abs(P[q]))) << "seed " << seed;
+                }
+    }
+}
+
 TEST(RefitRow, ReportsNonFiniteAtActiveSamples) {
     std::mt19937 rng(5);
     const std::vector<float> P = test::padded_phi(rng, 0.3f);
