@@ -31,10 +31,11 @@ inline void refit_axis(const float* __restrict P, int x, float& H, float& gp2, f
     gm2 += dmn * dmn + dpp * dpp;
 }
 
-}  // namespace
-
-NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m,
-                            float dt, int rows, float* __restrict out) {
+/// The refit over `rows` rows: out = φ + dt·|∇φ|(H_φ − hn) (Rate false) or |∇φ|(H_φ − hn) (Rate
+/// true) at the active samples; φ, or 0, elsewhere. Returns 1 if an active result is not finite.
+template <bool Rate>
+inline int refit_rows(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m, float dt,
+                      int rows, float* __restrict out) {
     int nonfinite = 0;
     for (int r = 0; r < rows; ++r, P += L, hn += kBlockDim, m += kBlockDim, out += kBlockDim) {
         std::int32_t mi[kBlockDim];
@@ -46,38 +47,25 @@ NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict h
             refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2);
             const float rhs = H - hn[x];  // φ_t = |∇φ| rhs, speed F = −rhs
             const float grad = std::sqrt(rhs < 0.0f ? gp2 : gm2);
-            const float v = P[x] + dt * grad * rhs;
+            const float v = Rate ? grad * rhs : P[x] + dt * grad * rhs;
             const bool act = mi[x] != 0;
             nonfinite |= int(act & !(std::abs(v) <= std::numeric_limits<float>::max()));
-            out[x] = act ? v : P[x];
+            out[x] = act ? v : (Rate ? 0.0f : P[x]);
         }
     }
     return nonfinite;
 }
 
-}  // namespace normalflow::engine
+}  // namespace
 
-namespace normalflow::engine {
+NF_ROW_KERNEL int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m,
+                            float dt, int rows, float* __restrict out) {
+    return refit_rows<false>(P, hn, m, dt, rows, out);
+}
 
 NF_ROW_KERNEL int refit_rate_row(const float* __restrict P, const float* __restrict hn,
                                  const std::uint8_t* __restrict m, int rows, float* __restrict out) {
-    int nonfinite = 0;
-    for (int r = 0; r < rows; ++r, P += L, hn += kBlockDim, m += kBlockDim, out += kBlockDim) {
-        std::int32_t mi[kBlockDim];
-        widen_mask(m, mi);
-        for (int x = 0; x < kBlockDim; ++x) {
-            float H = 0.0f, gp2 = 0.0f, gm2 = 0.0f;
-            refit_axis<kStride[0], kStride[1], kStride[2]>(P, x, H, gp2, gm2);
-            refit_axis<kStride[1], kStride[2], kStride[0]>(P, x, H, gp2, gm2);
-            refit_axis<kStride[2], kStride[0], kStride[1]>(P, x, H, gp2, gm2);
-            const float rhs = H - hn[x];
-            const float v = std::sqrt(rhs < 0.0f ? gp2 : gm2) * rhs;
-            const bool act = mi[x] != 0;
-            nonfinite |= int(act & !(std::abs(v) <= std::numeric_limits<float>::max()));
-            out[x] = act ? v : 0.0f;
-        }
-    }
-    return nonfinite;
+    return refit_rows<true>(P, hn, m, 0.0f, rows, out);
 }
 
 }  // namespace normalflow::engine

@@ -16,10 +16,6 @@ namespace normalflow::engine {
 int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m,
                             float dt, int rows, float* __restrict out);
 
-}  // namespace normalflow::engine
-
-namespace normalflow::engine {
-
 /// The refit's rate at the samples of `rows` rows: out = |∇φ|_upwind (H_φ − hn) where m, 0
 /// elsewhere (the stages of the super-time-stepping refit). Layout as refit_row.
 /// Returns 1 if an active result is not finite.

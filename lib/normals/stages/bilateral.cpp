@@ -364,19 +364,7 @@ private:
                         const float q[3] = {float(bc[0] * kBlockDim + x) - phi[i] * w.normals[0][i],
                                             float(bc[1] * kBlockDim + y) - phi[i] * w.normals[1][i],
                                             float(bc[2] * kBlockDim + z) - phi[i] * w.normals[2][i]};
-                        float best = r2;
-                        std::size_t at = SurfaceSamples::kPadding;
-                        for (std::int32_t b2 : S_.near(b)) {
-                            if (S_.box_distance2(b2, q) > best) continue;
-                            for (std::size_t j = S_.begin(b2); j < S_.end(b2); ++j) {
-                                const float dx = S_.p[0][j] - q[0], dy = S_.p[1][j] - q[1], dz = S_.p[2][j] - q[2];
-                                const float d2 = (dx * dx + dy * dy) + dz * dz;
-                                if (d2 < best) {
-                                    best = d2;
-                                    at = j;
-                                }
-                            }
-                        }
+                        const std::size_t at = nearest_sample(band, b, q, r2);
                         if (at == SurfaceSamples::kPadding) continue;  // nothing within reach: keep N
                         const float rq[3] = {range[0][at], range[1][at], range[2][at]};
                         // The nearest surface sample faces another way (the other wall of a groove
