@@ -174,10 +174,7 @@ public:
             c.ctl.tick(0.5 * double(pass + 1) / c.opt.normal_steps);
         }
         c.record().roughness = roughness(band, ks, r2);
-        if (c.opt.extend_by_gather)
-            extend(c, ks, kr, r2);
-        else
-            extend_nearest(c, ks, kr, r2);
+        extend(c, ks, kr, r2);
         if (!tv_) energy.push_back(loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false));
         c.record().normal_energy = std::move(energy);
     }
@@ -222,47 +219,6 @@ private:
         for (std::int32_t b2 : near)
             if ((b2 != home || !home_near) && S_.box_distance2(b2, q) <= best) scan(b2);
         return at;
-    }
-
-    /// The filtered normals into work().normals: each surface sample its own; every other active
-    /// sample x the result of one more pass of the filter at the surface sample nearest to its
-    /// closest point x − φ(x)N(x) (within the disc, and facing the same way as x's own normal;
-    /// otherwise x keeps N). extend() evaluates that pass at the closest point itself instead: the
-    /// same within the fraction of a voxel between the closest point and its nearest sample, at a
-    /// fraction of the cost.
-    void extend_nearest(StageContext& c, float ks, float kr, float r2) {
-        Band& band = c.band;
-        WorkBuffers& w = band.work();
-        const Samples& phi = band.phi();
-        const std::uint8_t* mask = band.mask();
-        const Samples(&range)[3] = guided_ ? guide_ : cur_;
-        filter_pass(band, range, ks, kr, r2, next_);
-        band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
-            const auto& bc = band.block_coord(std::size_t(b));
-            const std::size_t base = std::size_t(b) * kBlockVoxels;
-            for (int z = 0; z < kBlockDim; ++z)
-                for (int y = 0; y < kBlockDim; ++y)
-                    for (int x = 0; x < kBlockDim; ++x) {
-                        const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        if (!mask[i] || S_.taken(band, std::size_t(b), x, y, z, phi[i])) continue;
-                        const float q[3] = {float(bc[0] * kBlockDim + x) - phi[i] * w.normals[0][i],
-                                            float(bc[1] * kBlockDim + y) - phi[i] * w.normals[1][i],
-                                            float(bc[2] * kBlockDim + z) - phi[i] * w.normals[2][i]};
-                        const std::size_t at = nearest_sample(band, b, q, r2);
-                        if (at == SurfaceSamples::kPadding) continue;  // nothing within reach: keep N
-                        // the nearest surface sample faces another way: keep N (see extend())
-                        if ((range[0][at] * w.normals[0][i] + range[1][at] * w.normals[1][i]) +
-                                range[2][at] * w.normals[2][i] <
-                            kSameSide)
-                            continue;
-                        for (int k = 0; k < 3; ++k) w.normals[k][i] = next_[k][at];
-                    }
-            for (std::size_t j = S_.begin(b); j < S_.end(b); ++j) {
-                const std::size_t i = S_.index[j];
-                if (i == SurfaceSamples::kPadding) continue;
-                for (int k = 0; k < 3; ++k) w.normals[k][i] = cur_[k][j];
-            }
-        });
     }
 
     /// What the filter left: the 75th percentile over the surface samples of |N_i − M_i|, M_i the
@@ -343,16 +299,21 @@ private:
     }
 
     /// The filtered normals into work().normals: each surface sample its own; every other active
-    /// sample x the filtered normals around its closest point x − φ(x)N(x), with the range weight
-    /// taken against the filtered normal of the surface sample nearest to that point.
+    /// sample x (its closest point q = x − φ(x)N(x)) those of the surface sample nearest to q, when
+    /// one lies within the disc and faces the same way as x's own normal (otherwise x keeps N: the
+    /// other wall of a groove or a thin part, the far side of a crease's wedge). Which ones: by
+    /// default, one more pass of the filter at that nearest sample; with extend_by_gather, that
+    /// pass evaluated at q itself, the range weight against the nearest sample's normal (the same
+    /// within the fraction of a voxel between q and its nearest sample, at several times the cost).
     void extend(StageContext& c, float ks, float kr, float r2) {
         Band& band = c.band;
         WorkBuffers& w = band.work();
         const Samples& phi = band.phi();
         const std::uint8_t* mask = band.mask();
-        const std::vector<std::int32_t>& act = band.active();
         const Samples(&range)[3] = guided_ ? guide_ : cur_;
-        band.for_blocks(act, 0, [&](std::size_t, std::int32_t b, Scratch&) {
+        const bool at_q = c.opt.extend_by_gather;
+        if (!at_q) filter_pass(band, range, ks, kr, r2, next_);
+        band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
             const auto& bc = band.block_coord(std::size_t(b));
             const std::size_t base = std::size_t(b) * kBlockVoxels;
             float acc[32];
@@ -367,13 +328,13 @@ private:
                         const std::size_t at = nearest_sample(band, b, q, r2);
                         if (at == SurfaceSamples::kPadding) continue;  // nothing within reach: keep N
                         const float rq[3] = {range[0][at], range[1][at], range[2][at]};
-                        // The nearest surface sample faces another way (the other wall of a groove
-                        // or a thin part, the far side of a crease's wedge): keep the sample's own N.
                         if ((rq[0] * w.normals[0][i] + rq[1] * w.normals[1][i]) + rq[2] * w.normals[2][i] < kSameSide)
                             continue;
-                        gather(S_, b, range, cur_, q, rq, ks, kr, r2, acc);
-                        float o[3];
-                        if (!normalised(acc, o)) continue;
+                        float o[3] = {next_[0][at], next_[1][at], next_[2][at]};
+                        if (at_q) {
+                            gather(S_, b, range, cur_, q, rq, ks, kr, r2, acc);
+                            if (!normalised(acc, o)) continue;
+                        }
                         for (int k = 0; k < 3; ++k) w.normals[k][i] = o[k];
                     }
             // the surface samples of this block: their own filtered normals
