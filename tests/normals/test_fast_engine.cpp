@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -180,6 +181,32 @@ TEST(FastEngine, SpeedUpsDoNotDependOnTheThreads) {
         ASSERT_EQ(v1.values.size(), v2.values.size());
         EXPECT_EQ(0, std::memcmp(v1.values.data(), v2.values.data(), v1.values.size() * sizeof(float))) << ell;
     }
+}
+
+TEST(FastEngine, SuperStepsThatRunAwayFallBackToExplicitSteps) {
+    // Few, long super steps on heavy noise (0.6 voxel) and long refit times: a single super step
+    // of the whole time goes non-finite (which used to end the run with an error), two of them
+    // raise D in the first (which used to leave φ as it was). The refit then takes explicit steps
+    // from the last super step that held: it always does something, D ends below its start, and
+    // the default (6 growing super steps) needs no fallback.
+    for (const float ell : {8.0f, 12.0f})
+        for (const int n : {1, 2, kDefaultRefitSuperSteps}) {
+            Volume v = make_volume(40, 1.0, box_sdf(Vec3d(20.3, 19.6, 20.2), Vec3d(11, 9, 10)));
+            add_noise(v, 0.6, 21u);
+            SmoothOptions o = bilateral(ell);
+            o.refit_super_steps = n;
+            o.iterations = 1;
+            SmoothReport r;
+            ASSERT_NO_THROW(r = smooth_volume(v, o)) << n << " super steps, ell " << ell;
+            const SmoothIteration& it = r.iterations[0];
+            std::printf("ell %.0f, %d super steps: D %.1f -> %.1f, %d kept, %d evaluations\n", ell, n,
+                        it.refit_energy_start(), it.refit_energy_end, it.refit_steps, it.refit_evaluations);
+            EXPECT_GT(it.refit_steps, 0) << n << " super steps, ell " << ell;
+            EXPECT_LT(it.refit_energy_end, 0.7 * it.refit_energy_start()) << n << " super steps, ell " << ell;
+            if (n == kDefaultRefitSuperSteps) {
+                EXPECT_LE(it.refit_steps, n);  // no explicit fallback
+            }
+        }
 }
 
 TEST(FastEngine, NegativeSuperStepsAreRefused) {

@@ -199,7 +199,7 @@ int rkl2_stages(double tau, double dt) {
 /// + cg·m0 where the mask is set (y0 elsewhere is what every buffer holds there). The first stage
 /// (y2 = nullptr) also stores L(y0) into m0 and returns D(y0).
 double rkl2_stage(StageContext& c, const Samples& y1, const Samples* y2, const Samples& y0, Samples& m0, double a,
-                  double b, double ct, double cg, Samples& out) {
+                  double b, double ct, double cg, Samples& out, bool& nonfinite_out) {
     Band& band = c.band;
     WorkBuffers& w = band.work();
     const std::uint8_t* mask = band.mask();
@@ -247,11 +247,19 @@ double rkl2_stage(StageContext& c, const Samples& y1, const Samples* y2, const S
         if (nonfinite) bad = true;
         energy[k] = e;
     });
-    if (bad) c.ctl.fail("phi in the refit");
+    if (bad) nonfinite_out = true;
     double sum = 0.0;
     for (const double e : energy) sum += e;
     return sum;
 }
+
+struct ExplicitResult {
+    int steps = 0;
+    double d_end = 0.0;
+};
+ExplicitResult explicit_refit(StageContext& c, int max_steps, int patience, std::vector<double>& ds);
+/// The explicit refit's patience: steps without a new low of D before it stops (surface-sample filters).
+int explicit_patience(const SmoothOptions& o) { return std::max(5, o.refit_max_steps / 20); }
 
 /// The refit time refit_max_steps · refit_dt in refit_super_steps super steps of the
 /// Runge–Kutta–Legendre method (second order): the explicit refit's flow with far fewer
@@ -274,51 +282,89 @@ void refit_super_stepping(StageContext& c) {
     copy_samples(phi, prev_phi);
     // the explicit refit's patience, as a time: a super step that ends that long after the lowest
     // D without a new low stops the refit
-    const double patience_time = double(std::max(5, c.opt.refit_max_steps / 20)) * dt;
+    const double patience_time = double(explicit_patience(c.opt)) * dt;
     std::vector<double> ds;
     double best = 0.0, prev = 0.0, d_end = 0.0, since_best = 0.0, tau_prev = 0.0;
+    double time_kept = 0.0;  // the refit time φ has been carried through
     int kept = 0;
-    bool stopped = false;
+    bool stopped = false, runaway = false;
     for (int step = 0; step < n; ++step) {
         c.ctl.poll();
         const double tau = tau0 * std::pow(growth, step);
         const Rkl2 k(rkl2_stages(tau, dt));
+        bool nonfinite = false;
         // stage 1 from y0 = φ: into ring[0], L(φ) into m0, D(φ)
-        const double d = rkl2_stage(c, phi, nullptr, phi, m0, 0.0, 0.0, k.mut[1] * tau, 0.0, *ring[0]);
+        const double d = rkl2_stage(c, phi, nullptr, phi, m0, 0.0, 0.0, k.mut[1] * tau, 0.0, *ring[0], nonfinite);
         ++c.record().refit_evaluations;
         ds.push_back(d);
+        if (step > 0 && d > 2.0 * best) {  // the last super step ran away: undo it
+            std::swap(phi, prev_phi);
+            --kept;
+            time_kept -= tau_prev;
+            runaway = true;
+            break;
+        }
         if (step == 0 || d < best * (1.0 - c.opt.refit_tolerance)) {
             best = step == 0 ? d : std::min(best, d);
             since_best = 0.0;
         } else {
             since_best += tau_prev;
         }
-        if (step > 0 && (since_best >= patience_time || d > 2.0 * best)) {
+        if (step > 0 && since_best >= patience_time) {
             std::swap(phi, prev_phi);  // back to the start of the last super step
             d_end = prev;
             --kept;
             stopped = true;
+            // The first super step already raised D: it was too long to follow the flow, so the
+            // refit time goes to explicit steps instead of to nothing.
+            runaway = kept == 0;
             break;
         }
         tau_prev = tau;
         // stages 2 … s: ring[0] = Y_{j−1}, ring[1] = Y_{j−2} (Y_0 = φ at j = 2), ring[2] = Y_j
-        for (int j = 2; j <= k.s; ++j) {
+        for (int j = 2; j <= k.s && !nonfinite; ++j) {
             const auto J = std::size_t(j);
             const Samples& y2 = j == 2 ? phi : *ring[1];
-            rkl2_stage(c, *ring[0], &y2, phi, m0, k.mu[J], k.nu[J], k.mut[J] * tau, k.gat[J] * tau, *ring[2]);
+            rkl2_stage(c, *ring[0], &y2, phi, m0, k.mu[J], k.nu[J], k.mut[J] * tau, k.gat[J] * tau, *ring[2],
+                       nonfinite);
             ++c.record().refit_evaluations;
             std::swap(ring[1], ring[0]);  // ring[1] = Y_{j−1}
             std::swap(ring[0], ring[2]);  // ring[0] = Y_j
         }
+        if (nonfinite) {  // φ is still this super step's start
+            runaway = true;
+            break;
+        }
         std::swap(prev_phi, phi);    // prev_phi = this super step's start
         std::swap(phi, *ring[0]);    // φ = Y_s; ring[0] holds an old iterate (equal off the mask)
         ++kept;
+        time_kept += tau;
         prev = d;
         c.ctl.tick(0.5 + 0.5 * double(step + 1) / n);
     }
-    if (!stopped) {
+    if (!stopped && !runaway) {
         d_end = refit_energy(c);
         ds.push_back(d_end);
+        if (kept > 0 && d_end > 2.0 * best) {  // the last super step ran away: undo it
+            std::swap(phi, prev_phi);
+            --kept;
+            time_kept -= tau_prev;
+            runaway = true;
+        } else if (kept > 0 && !(d_end <= prev)) {  // it raised D: undo it, as the explicit refit does
+            std::swap(phi, prev_phi);
+            d_end = prev;
+            --kept;
+        }
+    }
+    if (runaway) {
+        stopped = false;
+        // A long super step can run away where the band's operator is stiffer than the explicit
+        // step allows (a non-finite stage, or D doubled): the rest of the refit time in explicit
+        // steps, from the last super step that held.
+        const int rest = int(std::lround((total - time_kept) / dt));
+        const ExplicitResult e = explicit_refit(c, std::max(rest, 1), explicit_patience(c.opt), ds);
+        kept += e.steps;
+        d_end = e.d_end;
     }
     SmoothIteration& r = c.record();
     r.refit_energy = std::move(ds);
@@ -339,12 +385,24 @@ void refit_to_normals(StageContext& c) {
         refit_super_stepping(c);
         return;
     }
+    std::vector<double> ds;  // D of each iterate evaluated
+    const ExplicitResult e = explicit_refit(c, c.opt.refit_max_steps, explicit_patience(c.opt), ds);
+    SmoothIteration& r = c.record();
+    r.refit_energy = std::move(ds);
+    r.refit_energy_end = e.d_end;
+    r.refit_steps = e.steps;
+}
+
+namespace {
+
+/// Up to max_steps explicit refit steps from φ, D of each iterate appended to ds; φ ends as the
+/// iterate the stop rule keeps (see refit_to_normals).
+ExplicitResult explicit_refit(StageContext& c, int max_steps, int patience, std::vector<double>& ds) {
     WorkBuffers& w = c.band.work();
     Samples& phi = c.band.phi();
     copy_samples(phi, w.phi_next);
     Samples& prev_phi = w.spare();
     copy_samples(phi, prev_phi);
-    std::vector<double> ds;  // D of each iterate evaluated
     int steps = 0;
     double prev = 0.0, d_end = 0.0;
     bool stopped = false;
@@ -354,15 +412,14 @@ void refit_to_normals(StageContext& c) {
     // the whole time, 6.4°). Their refit stops when D has not reached a new low for `patience`
     // steps, or when it rose to twice its low (a refit that runs away), undoing that last step.
     const bool patient = is_neighbourhood_filter(c.opt.mode);
-    const int patience = std::max(5, c.opt.refit_max_steps / 20);
     double best = 0.0;
     int since_best = 0;
-    for (int s = 0; s < c.opt.refit_max_steps; ++s) {
+    for (int s = 0; s < max_steps; ++s) {
         std::swap(w.phi_next, prev_phi);  // prev_phi ← φ_{s−1}; w.phi_next is overwritten by the step
         const double d = refit_step(c, true);  // D(φ_s); now w.phi_next = φ_s, phi = φ_{s+1}
         ++c.record().refit_evaluations;
         ds.push_back(d);
-        c.ctl.tick(0.5 + 0.5 * double(s + 1) / c.opt.refit_max_steps);
+        c.ctl.tick(0.5 + 0.5 * double(s + 1) / max_steps);
         if (patient) {
             if (s == 0 || d < best * (1.0 - c.opt.refit_tolerance)) {
                 best = s == 0 ? d : std::min(best, d);
@@ -400,10 +457,9 @@ void refit_to_normals(StageContext& c) {
         d_end = refit_energy(c);
         ds.push_back(d_end);
     }
-    SmoothIteration& r = c.record();
-    r.refit_energy = std::move(ds);
-    r.refit_energy_end = d_end;
-    r.refit_steps = steps;
+    return {steps, d_end};
 }
+
+}  // namespace
 
 }  // namespace normalflow::engine
