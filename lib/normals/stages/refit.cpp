@@ -314,6 +314,7 @@ void refit_super_stepping(StageContext& c) {
             std::swap(phi, prev_phi);  // back to the start of the last super step
             d_end = prev;
             --kept;
+            time_kept -= tau_prev;
             stopped = true;
             // The first super step already raised D: it was too long to follow the flow, so the
             // refit time goes to explicit steps instead of to nothing.
@@ -357,7 +358,6 @@ void refit_super_stepping(StageContext& c) {
         }
     }
     if (runaway) {
-        stopped = false;
         // A long super step can run away where the band's operator is stiffer than the explicit
         // step allows (a non-finite stage, or D doubled): the rest of the refit time in explicit
         // steps, from the last super step that held.
