@@ -99,7 +99,7 @@ struct SmoothOptions {
         ///< (fandisk_n0.3 at 256: 160 instead of 702 over two iterations). D is evaluated, and the
         ///< patient stop decided, once per super step. A super step that runs away (a non-finite
         ///< stage, D doubled) or a first one that already raises D is undone, and the rest of the
-        ///< refit time runs in explicit steps (none on the study's pairs). 0: the explicit steps of refit_dt (the default before version 0.2).
+        ///< refit time starts again in super steps from there (up to twice), then in explicit steps. 0: the explicit steps of refit_dt (the default before version 0.2).
     double refit_tolerance = 1e-4;  ///< >= 0: the refit stops when D decreases by less than this
                                     ///< fraction of itself in one step (0: until D stops decreasing).
                                     ///< The surface-sample filters: when D has not reached a new low by this
@@ -176,8 +176,8 @@ struct SmoothIteration {
                                         ///< MeanCurvature)
     double refit_energy_end = 0;        ///< D at the end of the refit: the smallest D seen (a last step
                                         ///< that raised D is undone)
-    int refit_steps = 0;                ///< refit steps kept (under refit_super_steps: super steps, plus
-                                        ///< the explicit steps of a fallback)
+    int refit_steps = 0;                ///< refit steps kept (under refit_super_steps: super steps, of
+                                        ///< every restart, plus the explicit steps of a fallback)
     int refit_evaluations = 0;          ///< evaluations of the refit's rate over the band: its explicit
                                         ///< steps, or the stages of its super steps (the refit's cost)
     std::size_t filter_points = 0;      ///< Bilateral, Guided, TotalVariation: the surface samples

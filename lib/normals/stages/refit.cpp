@@ -166,6 +166,8 @@ namespace {
 /// resolution 256, 6 super steps, mean normal angle against the explicit refit's 4.86°: uniform
 /// 5.41°, 1.5 4.84°, 2 4.83°, 3 (4 steps) 4.92°.
 constexpr double kSuperStepGrowth = 2.0;
+/// Restarts in super steps after one ran away, before the rest of the refit goes to explicit steps.
+constexpr int kSuperStepRetries = 2;
 
 /// The coefficients of an s-stage Runge–Kutta–Legendre super step of second order (Meyer,
 /// Balsara & Aslam 2014, Eq. 16–17): Y_1 = Y_0 + μ̃_1 τ L(Y_0); Y_j = μ_j Y_{j−1} + ν_j Y_{j−2} +
@@ -261,15 +263,21 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, int patience, std:
 /// The explicit refit's patience: steps without a new low of D before it stops (surface-sample filters).
 int explicit_patience(const SmoothOptions& o) { return std::max(5, o.refit_max_steps / 20); }
 
-/// The refit time refit_max_steps · refit_dt in refit_super_steps super steps of the
-/// Runge–Kutta–Legendre method (second order): the explicit refit's flow with far fewer
-/// evaluations of its rate (stages ∝ √time instead of ∝ time). D is evaluated at the start of each
-/// super step; the patient stop of the explicit refit, counted in super steps.
-void refit_super_stepping(StageContext& c) {
+struct SuperResult {
+    int kept = 0;            // super steps kept
+    double d_end = 0.0;      // D of φ at the end (when not runaway)
+    bool runaway = false;    // a super step ran away and was undone (see refit_super_stepping)
+    double time_kept = 0.0;  // the refit time φ was carried through
+};
+
+/// A refit time `total` in refit_super_steps super steps of the Runge–Kutta–Legendre method
+/// (second order) from φ: the explicit refit's flow with far fewer evaluations of its rate (stages
+/// ∝ √time instead of ∝ time). D (appended to ds) is evaluated at the start of each super step;
+/// the patient stop of the explicit refit, counted in time.
+SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& ds) {
     WorkBuffers& w = c.band.work();
     Samples& phi = c.band.phi();
     const double dt = std::min(c.opt.refit_dt, kMaxDt);
-    const double total = double(c.opt.refit_max_steps) * dt;
     const int n = c.opt.refit_super_steps;
     const double growth = kSuperStepGrowth;
     // super step k lasts tau0·growth^k; together they last `total`
@@ -283,7 +291,6 @@ void refit_super_stepping(StageContext& c) {
     // the explicit refit's patience, as a time: a super step that ends that long after the lowest
     // D without a new low stops the refit
     const double patience_time = double(explicit_patience(c.opt)) * dt;
-    std::vector<double> ds;
     double best = 0.0, prev = 0.0, d_end = 0.0, since_best = 0.0, tau_prev = 0.0;
     double time_kept = 0.0;  // the refit time φ has been carried through
     int kept = 0;
@@ -357,14 +364,40 @@ void refit_super_stepping(StageContext& c) {
             --kept;
         }
     }
-    if (runaway) {
-        // A long super step can run away where the band's operator is stiffer than the explicit
-        // step allows (a non-finite stage, or D doubled): the rest of the refit time in explicit
-        // steps, from the last super step that held.
-        const int rest = int(std::lround((total - time_kept) / dt));
-        const ExplicitResult e = explicit_refit(c, std::max(rest, 1), explicit_patience(c.opt), ds);
-        kept += e.steps;
-        d_end = e.d_end;
+    return {kept, d_end, runaway, time_kept};
+}
+
+/// The refit in super steps (run_super_steps). A long super step can run away where the band's
+/// operator is stiffer than the explicit step allows (a non-finite stage, D doubled, or a first
+/// super step that already raises D): it is undone, and the rest of the refit time starts again in
+/// super steps, short ones first, from the last one that held; after kSuperStepRetries such
+/// restarts, in explicit steps.
+void refit_super_stepping(StageContext& c) {
+    const double dt = std::min(c.opt.refit_dt, kMaxDt);
+    double left = double(c.opt.refit_max_steps) * dt;
+    std::vector<double> ds;
+    int kept = 0;
+    double d_end = 0.0;
+    for (int attempt = 0;; ++attempt) {
+        if (attempt == kSuperStepRetries) {
+            const int rest = int(std::lround(left / dt));
+            const ExplicitResult e = explicit_refit(c, std::max(rest, 1), explicit_patience(c.opt), ds);
+            kept += e.steps;
+            d_end = e.d_end;
+            break;
+        }
+        const SuperResult r = run_super_steps(c, left, ds);
+        kept += r.kept;
+        d_end = r.d_end;
+        if (!r.runaway) break;
+        // the first super step itself ran away: the same schedule again would too
+        if (!(r.time_kept > 0.0)) attempt = kSuperStepRetries - 1;
+        left -= r.time_kept;
+        if (!(left > 0.5 * dt)) {  // nothing left to refit: φ as the last super step left it
+            d_end = refit_energy(c);
+            ds.push_back(d_end);
+            break;
+        }
     }
     SmoothIteration& r = c.record();
     r.refit_energy = std::move(ds);
