@@ -330,10 +330,12 @@ private:
                         const float rq[3] = {range[0][at], range[1][at], range[2][at]};
                         if ((rq[0] * w.normals[0][i] + rq[1] * w.normals[1][i]) + rq[2] * w.normals[2][i] < kSameSide)
                             continue;
-                        float o[3] = {next_[0][at], next_[1][at], next_[2][at]};
+                        float o[3];
                         if (at_q) {
                             gather(S_, b, range, cur_, q, rq, ks, kr, r2, acc);
                             if (!normalised(acc, o)) continue;
+                        } else {
+                            for (int k = 0; k < 3; ++k) o[k] = next_[k][at];
                         }
                         for (int k = 0; k < 3; ++k) w.normals[k][i] = o[k];
                     }

@@ -23,6 +23,17 @@ inline float penalty(SmoothMode mode, float k2, float inv2mu2) {
     return k2;
 }
 
+/// e += D over the rows y0 … y1 of plane z of the block at `base` that have active samples, in
+/// row order (P: the block's φ gathered with its halo; N: the normal map).
+inline void add_plane_energy(const float* P, const std::uint8_t* mask, const Field3& N, std::size_t base, int z, int y0,
+                             int y1, double& e) {
+    for (int y = y0; y <= y1; ++y) {
+        const std::size_t i = base + std::size_t(bidx(0, y, z));
+        if (any_in_row(mask + i))
+            e += refit_energy_row(P + lidx(0, y, z), mask + i, N[0].data() + i, N[1].data() + i, N[2].data() + i);
+    }
+}
+
 /// H_N = ∇·N (central differences, Eq. 53) [− T ∇·(G N), Eq. 39] over the active blocks.
 void target_curvature(StageContext& c) {
     Band& band = c.band;
@@ -98,13 +109,7 @@ double refit_energy(StageContext& c) {
         gather_phi(band.neighbourhood(std::size_t(b)), phi, P);
         const std::size_t base = std::size_t(b) * kBlockVoxels;
         double e = 0.0;
-        for (int z = 0; z < kBlockDim; ++z)
-            for (int y = 0; y < kBlockDim; ++y) {
-                const std::size_t i0 = base + std::size_t(bidx(0, y, z));
-                if (!any_in_row(mask + i0)) continue;
-                e += refit_energy_row(P + lidx(0, y, z), mask + i0, w.normals[0].data() + i0, w.normals[1].data() + i0,
-                                      w.normals[2].data() + i0);
-            }
+        for (int z = 0; z < kBlockDim; ++z) add_plane_energy(P, mask, w.normals, base, z, 0, kBlockDim - 1, e);
         energy[k] = e;
     });
     double sum = 0.0;
@@ -141,13 +146,7 @@ double refit_step(StageContext& c, bool with_energy) {
             const std::size_t i0 = base + std::size_t(bidx(0, y0, z));
             nonfinite |= refit_row(P + lidx(0, y0, z), w.hn.data() + i0, mask + i0, dt, y1 - y0 + 1,
                                    w.phi_next.data() + i0);
-            if (with_energy)
-                for (int y = y0; y <= y1; ++y) {
-                    const std::size_t i = base + std::size_t(bidx(0, y, z));
-                    if (any_in_row(mask + i))
-                        e += refit_energy_row(P + lidx(0, y, z), mask + i, w.normals[0].data() + i,
-                                              w.normals[1].data() + i, w.normals[2].data() + i);
-                }
+            if (with_energy) add_plane_energy(P, mask, w.normals, base, z, y0, y1, e);
         }
         if (nonfinite) bad = true;
         energy[k] = e;
@@ -233,12 +232,7 @@ double rkl2_stage(StageContext& c, const Samples& y1, const Samples* y2, const S
                     if (m[q]) M0[q] = R[q];
                     o[q] = m[q] ? Y0[q] + fct * R[q] : Y0[q];
                 }
-                for (int y = r0; y <= r1; ++y) {
-                    const std::size_t i = base + std::size_t(bidx(0, y, z));
-                    if (any_in_row(mask + i))
-                        e += refit_energy_row(P + lidx(0, y, z), mask + i, w.normals[0].data() + i,
-                                              w.normals[1].data() + i, w.normals[2].data() + i);
-                }
+                add_plane_energy(P, mask, w.normals, base, z, r0, r1, e);
             } else {
                 const float* Y1 = y1.data() + i0;
                 const float* Y2 = y2->data() + i0;
@@ -295,6 +289,11 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
     double time_kept = 0.0;  // the refit time φ has been carried through
     int kept = 0;
     bool stopped = false, runaway = false;
+    const auto undo_last = [&] {  // back to the start of the last super step kept
+        std::swap(phi, prev_phi);
+        --kept;
+        time_kept -= tau_prev;
+    };
     for (int step = 0; step < n; ++step) {
         c.ctl.poll();
         const double tau = tau0 * std::pow(growth, step);
@@ -305,9 +304,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         ++c.record().refit_evaluations;
         ds.push_back(d);
         if (step > 0 && d > 2.0 * best) {  // the last super step ran away: undo it
-            std::swap(phi, prev_phi);
-            --kept;
-            time_kept -= tau_prev;
+            undo_last();
             runaway = true;
             break;
         }
@@ -318,10 +315,8 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
             since_best += tau_prev;
         }
         if (step > 0 && since_best >= patience_time) {
-            std::swap(phi, prev_phi);  // back to the start of the last super step
+            undo_last();
             d_end = prev;
-            --kept;
-            time_kept -= tau_prev;
             stopped = true;
             // The first super step already raised D: it was too long to follow the flow, so the
             // refit time goes to explicit steps instead of to nothing.
@@ -354,14 +349,11 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         d_end = refit_energy(c);
         ds.push_back(d_end);
         if (kept > 0 && d_end > 2.0 * best) {  // the last super step ran away: undo it
-            std::swap(phi, prev_phi);
-            --kept;
-            time_kept -= tau_prev;
+            undo_last();
             runaway = true;
         } else if (kept > 0 && !(d_end <= prev)) {  // it raised D: undo it, as the explicit refit does
-            std::swap(phi, prev_phi);
+            undo_last();
             d_end = prev;
-            --kept;
         }
     }
     return {kept, d_end, runaway, time_kept};
