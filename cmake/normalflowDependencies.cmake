@@ -29,6 +29,10 @@ if(NORMALFLOW_WITH_OPENMESH AND NOT TARGET OpenMeshCore)
   find_package(OpenMesh CONFIG REQUIRED)     # no version file in Debian 12: no version argument
 endif()
 
+if(NORMALFLOW_WITH_MESHOPTIMIZER AND NOT TARGET meshoptimizer::meshoptimizer)
+  find_package(meshoptimizer CONFIG REQUIRED)  # libmeshoptimizer-dev 0.18
+endif()
+
 if(NORMALFLOW_WITH_TETGEN AND NOT TARGET normalflow_tetgen_lib)
   # Debian's libtet1.5-dev has no CMake config or pkg-config file: wrap it in an imported target
   # that carries TETLIBRARY (tetgen.h must see it; the library was built with it).

@@ -130,4 +130,15 @@ std::string attribute_words(const Mesh& m) {
     return out.empty() ? "none" : out;
 }
 
+CLI::Option* add_decimator_option(CLI::App* cmd, Decimator& target) {
+    const std::map<std::string, Decimator> names = {
+        {"auto", Decimator::Auto}, {"quadric", Decimator::Quadric},
+        {"meshoptimizer", Decimator::Meshoptimizer}, {"cgal", Decimator::Cgal}};
+    return add_enum_option(cmd, "--decimator", target, names,
+                           "auto: normalflow's quadric edge collapse, checked (closed, manifold, no "
+                           "self-intersections), CGAL's edge collapse where a check fails; quadric: that alone; "
+                           "meshoptimizer: meshoptimizer's simplifier (fast, may leave the surface non-manifold "
+                           "or self-intersecting); cgal: CGAL's edge collapse (slower, GPL)");
+}
+
 }  // namespace normalflow::cli

@@ -11,6 +11,7 @@
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/stopwatch.h"
+#include "io/pipeline/pipeline.h"        // Decimator
 #include "io/pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
 #include "io/util/json.h"
 
@@ -82,6 +83,9 @@ CLI::Option* add_enum_option(CLI::App* cmd, const std::string& flag, E& target, 
     parse.description("");
     return cmd->add_option(flag, target, help)->transform(parse)->type_name(choices)->default_str(name_of(names, target));
 }
+
+/// Adds --decimator auto|quadric|meshoptimizer|cgal (what --target-faces runs, decimate_mesh).
+CLI::Option* add_decimator_option(CLI::App* cmd, Decimator& target);
 
 /// Makes cmd run fn(*args) under guarded() once parsed; the exit status reaches main() as a
 /// CLI::RuntimeError, which CLI::App::exit returns without printing.

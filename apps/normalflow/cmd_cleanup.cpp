@@ -1,4 +1,5 @@
 // normalflow cleanup IN OUT [--target-faces N | --max-error E | --edge-length L] [--min-component F]
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -7,6 +8,7 @@
 #include "core/errors.h"
 #include "io/cgal/cleanup.h"  // plain option and report structs; the code needs CGAL
 #include "io/io.h"
+#include "io/pipeline/pipeline.h"
 #include "io/pipeline/report_json.h"
 
 namespace normalflow::cli {
@@ -17,6 +19,7 @@ namespace {
 struct CleanupArgs {
     std::string input, output;
     cgal::CleanupOptions cleanup;
+    Decimator decimator = Decimator::Auto;
     OutputFlags out;
 };
 
@@ -31,10 +34,31 @@ int run_cleanup(const CleanupArgs& a) {
     if (o.max_error > 0) o.reduction = cgal::CleanupReduction::ErrorBound;
     if (o.target_edge_length > 0) o.reduction = cgal::CleanupReduction::Remesh;
     Mesh m = read_mesh(a.input);
-    const cgal::CleanupReport r = cgal::cleanup_mesh(m, o);
+    // --target-faces: the repairs here, then decimate_mesh (the quadric collapse by default, checked, CGAL's
+    // edge collapse as the fallback); --decimator cgal keeps CGAL's own FaceCount reduction.
+    const bool checked = o.reduction == cgal::CleanupReduction::FaceCount && a.decimator != Decimator::Cgal;
+    if (checked) o.reduction = cgal::CleanupReduction::None;
+    cgal::CleanupReport r = cgal::cleanup_mesh(m, o);
+    std::string decimator = o.target_faces > 0 ? "cgal" : "";
+    if (checked) {
+        const DecimationReport d = decimate_mesh(m, o.target_faces, a.decimator);
+        r.faces_after = d.faces_after;
+        r.vertices_after = d.vertices_after;
+        r.closed = d.closed;
+        r.manifold = d.manifold;
+        r.self_intersections = std::size_t(std::max(0LL, d.self_intersections));
+        // the distance to what cleanup was given (the repairs move the surface by far less than this)
+        r.result_to_input = d.result_to_input;
+        r.input_to_result = d.input_to_result;
+        r.hausdorff = d.hausdorff;
+        r.seconds += d.seconds;
+        r.warnings.insert(r.warnings.end(), d.warnings.begin(), d.warnings.end());
+        decimator = d.decimator;
+    }
     write_mesh(a.output, m);
     if (a.out.json) {
         Json j = to_json(r);
+        if (!decimator.empty()) j.set("decimator", decimator);
         j.set("command", "cleanup").set("input", a.input).set("output", a.output);
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {
@@ -60,7 +84,9 @@ void add_cleanup_command(CLI::App& app) {
     cmd->add_option("IN", a->input, "mesh file")->required();
     cmd->add_option("OUT", a->output, "mesh file")->required();
     cgal::CleanupOptions& o = a->cleanup;
-    cmd->add_option("--target-faces", o.target_faces, "decimate to at most N faces (edge collapse)");
+    cmd->add_option("--target-faces", o.target_faces,
+                    "decimate to at most N faces (quadric edge collapse, checked; see --decimator)");
+    add_decimator_option(cmd, a->decimator);
     cmd->add_option("--max-error", o.max_error, "decimate while within E (world units) of the input")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--edge-length", o.target_edge_length, "isotropic remeshing to edge length L (world units)")

@@ -324,8 +324,9 @@ void add_smooth_command(CLI::App& app) {
                     "keep: an open boundary stays, and the vertices within this many edge rings of it move partly")
         ->check(CLI::Range(0, 100000))->capture_default_str();
     cmd->add_option("--target-faces", a->pipeline.target_faces,
-                    "decimate the result to at most N faces (CGAL edge collapse)")
+                    "decimate the result to at most N faces (quadric edge collapse, checked; see --decimator)")
         ->check(CLI::Range(std::size_t(4), std::size_t(1) << 40));
+    add_decimator_option(cmd, a->pipeline.decimator);
     add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_smooth);

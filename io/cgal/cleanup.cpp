@@ -224,50 +224,7 @@ double mean_edge_length(const SM& sm) {
     return n ? s / static_cast<double>(n) : 0.0;
 }
 
-/// Points sampled on m: its vertices, then samples_per_face points per face (fixed barycentric
-/// coordinates spread over the triangle, no randomness).
-std::vector<Vec3d> sample_points(const Mesh& m, int samples_per_face) {
-    std::vector<Vec3d> s;
-    s.reserve(m.positions.size() + m.triangles.size() * static_cast<std::size_t>(samples_per_face));
-    for (const auto& p : m.positions) s.push_back(Vec3d{p[0], p[1], p[2]});
-    // Barycentric points: the centroid, then points towards each corner.
-    static constexpr double kBary[][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.6, 0.2, 0.2}, {0.2, 0.6, 0.2},
-                                          {0.2, 0.2, 0.6}, {0.5, 0.5, 0.0}, {0.0, 0.5, 0.5}, {0.5, 0.0, 0.5}};
-    const int ns = std::min(samples_per_face, 7);
-    for (const auto& t : m.triangles)
-        for (int k = 0; k < ns; ++k) {
-            Vec3d q{0, 0, 0};
-            for (int c = 0; c < 3; ++c) {
-                const auto& p = m.positions[t[c]];
-                for (int d = 0; d < 3; ++d) q[d] += kBary[k][c] * p[d];
-            }
-            s.push_back(q);
-        }
-    return s;
-}
-
-double one_sided(const Mesh& from, const Mesh& to, int samples_per_face) {
-    if (from.triangles.empty() || to.triangles.empty()) return 0.0;
-    const auto query = make_bvh_query(to);
-    const auto pts = sample_points(from, samples_per_face);
-    std::vector<double> d(pts.size(), 0.0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size(), 1024), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) d[i] = query->closest(pts[i]).squared_distance;
-    });
-    double mx = 0.0;
-    for (double x : d) mx = std::max(mx, x);
-    return std::sqrt(mx);
-}
-
 }  // namespace
-
-SampledDistance sampled_hausdorff(const Mesh& a, const Mesh& b, int samples_per_face) {
-    SampledDistance r;
-    r.a_to_b = one_sided(a, b, samples_per_face);
-    r.b_to_a = one_sided(b, a, samples_per_face);
-    r.hausdorff = std::max(r.a_to_b, r.b_to_a);
-    return r;
-}
 
 CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -365,7 +322,7 @@ CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt) {
                 const MeshReport a = mesh_report(result), b = mesh_report(candidate);
                 // ErrorBound is a promise: a repair that moves the surface beyond it is not kept.
                 const bool within = opt.reduction != CleanupReduction::ErrorBound ||
-                                    one_sided(candidate, reference, opt.distance_samples_per_face) <= opt.max_error;
+                                    sampled_max_distance(candidate, reference, opt.distance_samples_per_face) <= opt.max_error;
                 if (!candidate.triangles.empty() && (b.closed || !a.closed) && (b.manifold || !a.manifold) &&
                     within && count_self_intersections(candidate) < before)
                     result = std::move(candidate);

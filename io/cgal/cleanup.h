@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "metrics/surface_distance.h"
 
 namespace normalflow::cgal {
 
@@ -101,14 +102,9 @@ struct CleanupReport {
 /// the result does not depend on the thread count.
 CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt = {});
 
-/// Symmetric sampled Hausdorff distance between two meshes (world units): vertices and
-/// samples_per_face interior points per face of each, against the other's triangles (BVH queries).
-/// Returns {symmetric, a->b, b->a}. Parallel over samples; the result is independent of threads.
-struct SampledDistance {
-    double hausdorff = 0.0;
-    double a_to_b = 0.0;
-    double b_to_a = 0.0;
-};
-SampledDistance sampled_hausdorff(const Mesh& a, const Mesh& b, int samples_per_face = 3);
+/// The sampled Hausdorff distance (lib/metrics/surface_distance.h), also under this namespace.
+using normalflow::sampled_hausdorff;
+using normalflow::SampledDistance;
+using normalflow::sampled_max_distance;
 
 }  // namespace normalflow::cgal

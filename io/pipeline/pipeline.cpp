@@ -12,8 +12,14 @@
 #include "extract/surface_attributes.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/memory_estimate.h"
+#include "core/mesh_report.h"
+#include "extract/decimate.h"
+#include "metrics/surface_distance.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/aabb_distance.h"
+#endif
+#ifdef NORMALFLOW_HAS_MESHOPT
+#include "io/meshopt/decimate.h"
 #endif
 
 namespace normalflow {
@@ -87,8 +93,14 @@ void validate(const PipelineOptions& o) {
     if (o.fit.boundary_rings < 0) bad_option("fit.boundary_rings", str(o.fit.boundary_rings), ">= 0");
     if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
 #ifndef NORMALFLOW_HAS_CGAL
-    if (o.target_faces > 0)
-        throw InvalidInput("smooth_mesh: target_faces (--target-faces): decimation needs a build with CGAL");
+    if (o.target_faces > 0 && o.decimator == Decimator::Cgal)
+        throw InvalidInput("smooth_mesh: decimator cgal: CGAL's edge collapse needs a build with CGAL");
+#endif
+#ifndef NORMALFLOW_HAS_MESHOPT
+    if (o.target_faces > 0 && o.decimator == Decimator::Meshoptimizer)
+        throw InvalidInput("smooth_mesh: decimator meshoptimizer: needs a build with meshoptimizer");
+#endif
+#ifndef NORMALFLOW_HAS_CGAL
     if (o.distance == DistanceQuery::CgalAabb)
         throw InvalidInput("smooth_mesh: distance = aabb: CGAL's AABB tree needs a build with CGAL");
 #endif
@@ -184,10 +196,6 @@ Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, Pipelin
 
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
     if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
-#ifndef NORMALFLOW_HAS_CGAL
-    if (o.target_faces > 0)
-        throw InvalidInput("smooth_mesh: target_faces (--target-faces): decimation needs a build with CGAL");
-#endif
     PipelineReport local;
     PipelineReport& r = report ? *report : local;
     Stopwatch clock;
@@ -200,22 +208,151 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
                                "shrink away); raise --resolution or lower --iterations");
         throw InvalidInput("the volume holds no surface (every sample has the same sign)");
     }
-#ifdef NORMALFLOW_HAS_CGAL
     if (o.target_faces > 0) {
         detail::begin(progress, "decimate");
-        cgal::CleanupOptions co;
-        co.reduction = cgal::CleanupReduction::FaceCount;
-        co.target_faces = o.target_faces;
-        r.decimate = cgal::cleanup_mesh(m, co);
+        r.decimate = decimate_mesh(m, o.target_faces, o.decimator);
         r.decimated = true;
         append(r.warnings, r.decimate.warnings);
         r.seconds.decimate = clock.lap();
     }
-#endif
     set_volume_normals(m, v);  // the processed surface's own normals: viewers shade it smooth
     r.seconds.total += r.seconds.extract + r.seconds.decimate;
     r.peak_memory_bytes = peak_memory_bytes();
     return m;
+}
+
+const char* to_string(Decimator d) {
+    switch (d) {
+        case Decimator::Auto: return "auto";
+        case Decimator::Quadric: return "quadric";
+        case Decimator::Meshoptimizer: return "meshoptimizer";
+        case Decimator::Cgal: return "cgal";
+    }
+    return "?";
+}
+
+namespace {
+
+/// The first guarantee of `before` that `after` breaks ("" when none): closed, manifold, and
+/// (self_intersections >= 0) free of self-intersections.
+std::string broken_guarantee(const MeshReport& before, const MeshReport& after, long long self_intersections) {
+    if (before.closed && !after.closed)
+        return "not closed (" + std::to_string(after.boundary_edges) + " boundary edges)";
+    if (before.manifold && !after.manifold)
+        return "not manifold (" + std::to_string(after.non_manifold_edges) + " non-manifold edges, " +
+               std::to_string(after.non_manifold_vertices) + " non-manifold vertices)";
+    if (self_intersections > 0) return std::to_string(self_intersections) + " pairs of self-intersecting faces";
+    return "";
+}
+
+long long self_intersection_pairs([[maybe_unused]] const Mesh& m) {
+#ifdef NORMALFLOW_HAS_CGAL
+    return static_cast<long long>(count_self_intersections(m));
+#else
+    return -1;
+#endif
+}
+
+}  // namespace
+
+DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator decimator) {
+    Stopwatch clock;
+    check_mesh(m, "decimate_mesh");
+    if (m.triangles.empty()) throw InvalidInput("decimate_mesh: empty mesh (no triangles)");
+    if (target_faces < 4) throw InvalidInput("decimate_mesh: target_faces must be >= 4, got " + str(target_faces));
+#ifndef NORMALFLOW_HAS_MESHOPT
+    if (decimator == Decimator::Meshoptimizer)
+        throw InvalidInput("decimate_mesh: decimator meshoptimizer: needs a build with meshoptimizer");
+#endif
+#ifndef NORMALFLOW_HAS_CGAL
+    if (decimator == Decimator::Cgal)
+        throw InvalidInput("decimate_mesh: decimator cgal: CGAL's edge collapse needs a build with CGAL");
+#endif
+    DecimationReport rep;
+    rep.faces_before = m.triangles.size();
+    rep.vertices_before = m.positions.size();
+    const MeshReport input = mesh_report(m);
+    Mesh result;
+    bool done = false;
+    if (decimator == Decimator::Auto || decimator == Decimator::Quadric) {
+        Stopwatch t;
+        result = m;
+        decimate_mesh_qem(result, {.target_faces = target_faces});
+        rep.seconds_decimate += t.lap();
+        rep.decimator = "quadric";
+        rep.self_intersections = self_intersection_pairs(result);
+        MeshReport after = mesh_report(result);
+#ifdef NORMALFLOW_HAS_CGAL
+        // A few pairs of faces decimated through each other (deep folds, thin parts): CGAL's local
+        // repair first (cleanup_mesh's self-intersection step alone), kept only if it clears them all
+        // and keeps the mesh as closed and manifold as it was.
+        if (decimator == Decimator::Auto && rep.self_intersections > 0 && broken_guarantee(input, after, -1).empty()) {
+            Mesh repaired = result;
+            cgal::CleanupOptions co;
+            co.remove_degenerate = false;
+            co.orient_outward = false;
+            const cgal::CleanupReport cr = cgal::cleanup_mesh(repaired, co);
+            const MeshReport ra = mesh_report(repaired);
+            if (cr.self_intersections == 0 && broken_guarantee(input, ra, 0).empty()) {
+                rep.repaired_self_intersections = std::size_t(rep.self_intersections);
+                rep.self_intersections = 0;
+                result = std::move(repaired);
+                after = ra;
+            }
+            rep.seconds_decimate += t.lap();
+        }
+#endif
+        const std::string why = broken_guarantee(input, after, rep.self_intersections);
+        done = why.empty() || decimator == Decimator::Quadric;
+#ifndef NORMALFLOW_HAS_CGAL
+        done = true;  // nothing to fall back to: the result is reported as it is
+#endif
+        if (!done)
+            rep.fallback = "the quadric decimation's result was " + why + "; decimated with CGAL's edge collapse instead";
+    }
+#ifdef NORMALFLOW_HAS_MESHOPT
+    if (decimator == Decimator::Meshoptimizer) {
+        Stopwatch t;
+        result = m;
+        meshopt::decimate_mesh(result, {.target_faces = target_faces});
+        rep.seconds_decimate += t.lap();
+        rep.decimator = "meshoptimizer";
+        rep.self_intersections = self_intersection_pairs(result);
+        done = true;
+    }
+#endif
+#ifdef NORMALFLOW_HAS_CGAL
+    if (!done) {
+        Stopwatch t;
+        result = m;
+        cgal::CleanupOptions co;
+        co.reduction = cgal::CleanupReduction::FaceCount;
+        co.target_faces = target_faces;
+        const cgal::CleanupReport cr = cgal::cleanup_mesh(result, co);
+        rep.seconds_decimate += t.lap();
+        rep.decimator = "cgal";
+        rep.self_intersections = static_cast<long long>(cr.self_intersections);
+        append(rep.warnings, cr.warnings);
+        if (!rep.fallback.empty()) rep.warnings.push_back(rep.fallback);
+    }
+#endif
+    const MeshReport out = mesh_report(result);
+    rep.closed = out.closed;
+    rep.manifold = out.manifold;
+    if (rep.decimator != "cgal") {  // CGAL's cleanup reported its own
+        const std::string why = broken_guarantee(input, out, rep.self_intersections);
+        if (!why.empty()) rep.warnings.push_back("decimated result is " + why);
+    }
+    // Both ways; from the input (dense: an extraction has vertices a fraction of a voxel apart) its
+    // vertices suffice, from the result 3 more points per face.
+    rep.result_to_input = sampled_max_distance(result, m, 3);
+    rep.input_to_result = sampled_max_distance(m, result, 0);
+    rep.hausdorff = std::max(rep.result_to_input, rep.input_to_result);
+    rep.faces_after = result.triangles.size();
+    rep.vertices_after = result.positions.size();
+    m = std::move(result);
+    rep.seconds = clock.lap();
+    return rep;
 }
 
 const char* to_string(Connectivity c) {

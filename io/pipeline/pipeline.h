@@ -3,7 +3,8 @@
 /// The whole mesh-to-mesh pipeline of normalflow in one call: repair → scan conversion → level-set
 /// normal-map smoothing (Tasdizen et al. 2003) → marching-tetrahedra extraction → decimation.
 /// The normalflow tool (voxelize, extract, smooth) and the pipeline benchmarks run exactly this.
-/// No CGAL type appears here; repair and decimation need a build with NORMALFLOW_WITH_CGAL.
+/// No CGAL type appears here; repair needs a build with NORMALFLOW_WITH_CGAL, decimation runs in any
+/// build (CGAL adds its self-intersection check and fallback).
 
 #include <cstddef>
 #include <string>
@@ -69,6 +70,44 @@ const char* to_string(Connectivity c);
 /// 2.86°; the one exception, twelve_imp0.5 (1.66°), is kept at a cost of 0.18°.
 inline constexpr double kAutoKeepFitAngleDeg = 2.5;
 
+/// Which decimator target_faces runs (decimate_mesh).
+enum class Decimator {
+    Auto,           ///< Quadric, its result checked; CGAL's edge collapse instead where that result breaks a
+                    ///< guarantee the input had (closed, manifold, free of self-intersections) and the
+                    ///< build has CGAL
+    Quadric,        ///< normalflow's own quadric edge collapse (lib/extract decimate_mesh_qem) only: its
+                    ///< result is checked and reported, never replaced
+    Meshoptimizer,  ///< meshoptimizer's simplifier (io/meshopt; fast, but version 0.18 leaves extracted
+                    ///< surfaces non-manifold and self-intersecting: benchmarks/README.md, "Decimation")
+    Cgal,           ///< CGAL's edge collapse (io/cgal cleanup_mesh, FaceCount): the decimator before version 0.2
+};
+
+/// "auto", "quadric", "meshoptimizer", "cgal".
+const char* to_string(Decimator d);
+
+/// What decimate_mesh did and what the result is.
+struct DecimationReport {
+    std::string decimator;  ///< the decimator whose result was kept: "quadric", "meshoptimizer" or "cgal"
+    std::string fallback;   ///< Decimator::Auto: why CGAL re-did the quadric decimation ("" when it did not)
+    std::size_t faces_before = 0;
+    std::size_t faces_after = 0;
+    std::size_t vertices_before = 0;
+    std::size_t vertices_after = 0;
+    /// Sampled distances between the result and the input, world units (sampled_max_distance: from the
+    /// result its vertices and 3 points per face, from the input its vertices), and their maximum.
+    double hausdorff = 0.0;
+    double result_to_input = 0.0;
+    double input_to_result = 0.0;
+    bool closed = false;                 ///< the result has no boundary edge
+    bool manifold = false;               ///< the result has no non-manifold edge or vertex
+    long long self_intersections = -1;   ///< pairs of intersecting faces; -1: not checked (a build without CGAL)
+    /// Decimator::Auto: pairs the quadric decimation left that CGAL's local repair then removed.
+    std::size_t repaired_self_intersections = 0;
+    double seconds_decimate = 0.0;       ///< the decimation itself (both decimators' when CGAL re-did it)
+    double seconds = 0.0;                ///< the whole call: decimation, checks and distances
+    std::vector<std::string> warnings;
+};
+
 struct PipelineOptions {
     /// Scan conversion: resolution (0: automatic, auto_resolution) or voxel size, band half-width (raised to
     /// kSmoothingScanBandVoxels when smoothing), shell thickness, threads.
@@ -103,9 +142,11 @@ struct PipelineOptions {
     bool fit_to_normal_map = false;
     /// Extraction of the zero level set.
     ExtractOptions extract;
-    /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (CGAL edge collapse,
-    /// io/cgal cleanup_mesh); 0: keep every triangle. Needs a build with CGAL.
+    /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (decimate_mesh); 0: keep
+    /// every triangle. Needs a build with meshoptimizer or CGAL.
     std::size_t target_faces = 0;
+    /// The decimator target_faces runs.
+    Decimator decimator = Decimator::Auto;
     /// Refuse, before anything big is allocated, a run estimated to need more than this many
     /// bytes; 0: the memory the system has available now (MemAvailable).
     std::size_t max_memory_bytes = 0;
@@ -139,7 +180,7 @@ struct PipelineReport {
     bool trimmed = false;        ///< an open input's re-meshed result was trimmed to its footprint
     TrimReport trim;             ///< valid when trimmed
     bool decimated = false;      ///< decimation ran (target_faces > 0)
-    cgal::CleanupReport decimate;  ///< valid when decimated
+    DecimationReport decimate;   ///< valid when decimated
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order
@@ -186,6 +227,19 @@ Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, Pipeli
 /// \throw InvalidInput if the volume holds no surface.
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                     Progress* progress = nullptr);
+
+/// Decimates m in place to at most target_faces faces (>= 4) with the chosen decimator, then checks
+/// the result: closed and manifold where m was, free of self-intersections (builds with CGAL), and its
+/// sampled Hausdorff distance to m. Decimator::Auto runs normalflow's quadric edge collapse
+/// (decimate_mesh_qem: manifold by construction, no folds); where two parts were decimated through
+/// each other and the build has CGAL, CGAL's local self-intersection repair on that result (kept if it
+/// clears them all); where a guarantee is still broken, CGAL's edge collapse (cleanup_mesh) on m
+/// instead, with the reason in DecimationReport::fallback. Attributes: the quadric and meshoptimizer decimators keep the surviving
+/// vertices' normals, colours and texture coordinates; CGAL's result has none.
+/// \throw InvalidInput for an empty or invalid mesh, target_faces < 4, or a decimator this build lacks.
+/// Cost: fandisk extracted at resolution 256 (1.1 M faces) to 20,000 faces: benchmarks/README.md,
+/// "Decimation" (nf_bench_decimate).
+DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator decimator = Decimator::Auto);
 
 /// The median length of the mesh's edges (each triangle's three, so an inner edge counts twice),
 /// world units; 0 for a mesh without triangles. What smooth_mesh takes as the model's length unit

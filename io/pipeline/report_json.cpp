@@ -90,6 +90,17 @@ Json to_json(const cgal::CleanupReport& r) {
     return j;
 }
 
+Json to_json(const DecimationReport& r) {
+    Json j = Json::object();
+    j.set("decimator", r.decimator).set("fallback", r.fallback).set("faces_before", r.faces_before)
+        .set("faces_after", r.faces_after).set("vertices_before", r.vertices_before)
+        .set("vertices_after", r.vertices_after).set("hausdorff", r.hausdorff)
+        .set("result_to_input", r.result_to_input).set("input_to_result", r.input_to_result)
+        .set("closed", r.closed).set("manifold", r.manifold).set("self_intersections", r.self_intersections)
+        .set("repaired_self_intersections", r.repaired_self_intersections).set("seconds_decimate", r.seconds_decimate).set("seconds", r.seconds).set("warnings", Json::array(r.warnings));
+    return j;
+}
+
 Json to_json(const MeshReport& r) {
     Json j = Json::object();
     j.set("vertices", r.vertices).set("input_vertices", r.input_vertices)

@@ -43,6 +43,11 @@ Json to_json(const cgal::CleanupReport& r);
 /// duplicate_faces, inconsistent_edges, closed, manifold, oriented, euler_characteristic, area,
 /// volume, bbox [min x, y, z, max x, y, z], warnings.
 Json to_json(const MeshReport& r);
+/// decimator, fallback, faces and vertices before and after, hausdorff, result_to_input,
+/// input_to_result, closed, manifold, self_intersections (-1: not checked), repaired_self_intersections,
+/// seconds_decimate, seconds,
+/// warnings.
+Json to_json(const DecimationReport& r);
 
 /// repair (when repaired), distance, memory_estimate_bytes, voxelize (the scan report plus
 /// band_half_width as run), smooth (when smoothed), extract, decimate (when decimated),

@@ -1,0 +1,386 @@
+// Decimation: normalflow's quadric edge collapse (lib/extract decimate_mesh_qem), meshoptimizer's
+// simplifier (io/meshopt) and the pipeline's checked decimate_mesh, with CGAL's edge collapse as the
+// fallback and the alternative.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <set>
+#include <string>
+#include <tuple>
+
+#include "core/errors.h"
+#include "core/mesh_report.h"
+#include "extract/decimate.h"
+#include "extract/extract_surface.h"
+#include "io/cgal/repair.h"
+#include "io/io.h"
+#include "io/meshopt/decimate.h"
+#include "io/pipeline/pipeline.h"
+#include "metrics/surface_distance.h"
+#include "sdf/closest_triangle.h"
+#include "sdf/scan_convert.h"
+#include "sdf/sdf_test_meshes.h"
+#include "support/attributed_mesh.h"
+#include "support/test_files.h"
+
+namespace normalflow {
+namespace {
+
+using Key = std::tuple<float, float, float>;
+Key key(const Vec3f& p) { return {p.x, p.y, p.z}; }
+
+/// The positions of the vertices on open borders (edges of one face).
+std::set<Key> border_vertices(const Mesh& m) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> count;
+    for (const Tri& t : m.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+            ++count[{std::min(a, b), std::max(a, b)}];
+        }
+    std::set<Key> out;
+    for (const auto& [e, n] : count)
+        if (n == 1) {
+            out.insert(key(m.positions[e.first]));
+            out.insert(key(m.positions[e.second]));
+        }
+    return out;
+}
+
+/// A sphere scan-converted at `resolution` and extracted: a closed manifold re-mesh like the pipeline's.
+Mesh extracted_sphere(int resolution) {
+    const Mesh s = test::icosphere(1.0, 4);
+    ScanConvertOptions so;
+    so.resolution = resolution;
+    return extract_surface(scan_convert(s, *make_bvh_query(s), so));
+}
+
+TEST(MeshoptDecimate, SphereReachesTheFaceCountClosedAndOnTheSphere) {
+    Mesh m = test::icosphere(1.0, 5);  // 20480 faces
+    const std::set<Key> before = [&] {
+        std::set<Key> s;
+        for (const Vec3f& p : m.positions) s.insert(key(p));
+        return s;
+    }();
+    const Mesh input = m;
+    const meshopt::DecimateReport r = meshopt::decimate_mesh(m, {.target_faces = 2000});
+    EXPECT_EQ(r.faces_before, 20480u);
+    EXPECT_EQ(r.faces_after, m.triangles.size());
+    EXPECT_LE(r.faces_after, 2000u);
+    EXPECT_GE(r.faces_after, 1800u);
+    EXPECT_TRUE(r.reached_target);
+    EXPECT_EQ(r.vertices_after, m.positions.size());
+    const MeshReport mr = mesh_report(m);
+    EXPECT_TRUE(mr.closed);
+    EXPECT_TRUE(mr.manifold);
+    EXPECT_EQ(mr.referenced_vertices, m.positions.size());  // compacted
+    EXPECT_EQ(mr.euler_characteristic, 2);
+    EXPECT_GT(mr.volume, 4.0);  // orientation kept (4/3 π = 4.19)
+    // Collapses go onto existing vertices: every vertex is one of the input's, on the unit sphere.
+    for (const Vec3f& p : m.positions) EXPECT_TRUE(before.count(key(p))) << p.x << " " << p.y << " " << p.z;
+    const SampledDistance d = sampled_hausdorff(m, input, 3);
+    EXPECT_GT(d.hausdorff, 0.0);
+    EXPECT_LT(d.hausdorff, 0.02);  // 2000 faces on a unit sphere: chord error about 0.005
+    EXPECT_GT(r.error, 0.0);
+    EXPECT_LT(r.error, 0.05);
+}
+
+TEST(MeshoptDecimate, SurvivingVerticesKeepTheirAttributes) {
+    Mesh m = test::attributed_sphere(4);  // 5120 faces
+    const Mesh input = m;
+    meshopt::decimate_mesh(m, {.target_faces = 500});
+    ASSERT_LE(m.triangles.size(), 500u);
+    ASSERT_EQ(m.normals.size(), m.positions.size());
+    ASSERT_EQ(m.colors.size(), m.positions.size());
+    ASSERT_EQ(m.texcoords.size(), m.positions.size());
+    std::map<Key, std::size_t> at;
+    for (std::size_t i = 0; i < input.positions.size(); ++i) at[key(input.positions[i])] = i;
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        const auto it = at.find(key(m.positions[i]));
+        ASSERT_NE(it, at.end());
+        const std::size_t j = it->second;
+        EXPECT_EQ(m.normals[i], input.normals[j]);
+        EXPECT_EQ(m.colors[i], input.colors[j]);
+        EXPECT_EQ(m.texcoords[i], input.texcoords[j]);
+    }
+}
+
+TEST(MeshoptDecimate, OpenBordersStayWhereTheyAreUnlessUnlocked) {
+    const Mesh sheet = test::sheet(1.0, 40);  // a flat open square, 3200 faces
+    const std::set<Key> border = border_vertices(sheet);
+    ASSERT_GT(border.size(), 100u);
+    Mesh locked = sheet, free = sheet;
+    meshopt::decimate_mesh(locked, {.target_faces = 400});
+    meshopt::decimate_mesh(free, {.target_faces = 400, .lock_border = false});
+    EXPECT_EQ(border_vertices(locked), border);  // every border vertex kept: the outline is unchanged
+    EXPECT_LT(free.triangles.size(), locked.triangles.size());
+    EXPECT_LT(border_vertices(free).size(), border.size());  // the flag is what kept them
+}
+
+TEST(MeshoptDecimate, SmallMeshesAndBadInput) {
+    Mesh m = test::icosphere(1.0, 1);  // 80 faces
+    const Mesh input = m;
+    meshopt::decimate_mesh(m, {.target_faces = 80});
+    EXPECT_EQ(m.triangles, input.triangles);
+    EXPECT_EQ(m.positions, input.positions);
+    EXPECT_THROW(meshopt::decimate_mesh(m, {.target_faces = 3}), InvalidInput);
+    Mesh empty;
+    EXPECT_THROW(meshopt::decimate_mesh(empty, {.target_faces = 10}), InvalidInput);
+    Mesh bad = input;
+    bad.triangles[0][1] = 1000;
+    EXPECT_THROW(meshopt::decimate_mesh(bad, {.target_faces = 10}), InvalidInput);
+    bad = input;
+    bad.colors.resize(3);
+    EXPECT_THROW(meshopt::decimate_mesh(bad, {.target_faces = 10}), InvalidInput);
+}
+
+// --- normalflow's quadric edge collapse ---
+
+/// The cube [-1, 1]³ with each face an n×n grid of squares, each split in two; shared vertices.
+Mesh grid_cube(int n) {
+    Mesh m;
+    std::map<std::tuple<int, int, int>, std::uint32_t> index;
+    auto vertex = [&](int i, int j, int k) {  // integer coordinates in [0, n]
+        const auto [it, added] = index.try_emplace({i, j, k}, std::uint32_t(m.positions.size()));
+        if (added) m.positions.push_back(Vec3f(Vec3d(2.0 * i / n - 1, 2.0 * j / n - 1, 2.0 * k / n - 1)));
+        return it->second;
+    };
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side)
+            for (int a = 0; a < n; ++a)
+                for (int b = 0; b < n; ++b) {
+                    std::uint32_t q[4];
+                    const int da[4] = {0, 1, 1, 0}, db[4] = {0, 0, 1, 1};
+                    for (int c = 0; c < 4; ++c) {
+                        int p[3];
+                        p[axis] = side * n;
+                        p[(axis + 1) % 3] = a + da[c];
+                        p[(axis + 2) % 3] = b + db[c];
+                        q[c] = vertex(p[0], p[1], p[2]);
+                    }
+                    if (side) {  // outward: the quad's normal along +axis for side 1, −axis for side 0
+                        m.triangles.push_back({q[0], q[1], q[2]});
+                        m.triangles.push_back({q[0], q[2], q[3]});
+                    } else {
+                        m.triangles.push_back({q[0], q[2], q[1]});
+                        m.triangles.push_back({q[0], q[3], q[2]});
+                    }
+                }
+    return m;
+}
+
+TEST(QuadricDecimate, CubeKeepsItsCornersAndEdgesExactly) {
+    // The quadric of a corner has rank 3 (three planes) and of an edge rank 2: the collapses leave the
+    // 8 corners where they are and every vertex on the cube's surface, on its edges where it was.
+    Mesh m = grid_cube(24);  // 6912 faces
+    ASSERT_TRUE(mesh_report(m).closed && mesh_report(m).manifold);
+    ASSERT_GT(mesh_report(m).volume, 0.0);
+    const QemReport r = decimate_mesh_qem(m, {.target_faces = 100});
+    EXPECT_LE(r.faces_after, 100u);
+    EXPECT_TRUE(r.reached_target);
+    const MeshReport mr = mesh_report(m);
+    EXPECT_TRUE(mr.closed);
+    EXPECT_TRUE(mr.manifold);
+    EXPECT_EQ(mr.euler_characteristic, 2);
+    EXPECT_EQ(mr.degenerate_faces, 0u);
+    EXPECT_NEAR(mr.volume, 8.0, 1e-4);  // nothing cut off
+    int corners = 0;
+    for (const Vec3f& p : m.positions) {
+        const double ax = std::abs(p.x), ay = std::abs(p.y), az = std::abs(p.z);
+        EXPECT_NEAR(std::max({ax, ay, az}), 1.0, 1e-6);  // on the surface
+        corners += ax == 1.0 && ay == 1.0 && az == 1.0;
+    }
+    EXPECT_EQ(corners, 8);
+    EXPECT_LT(r.max_error, 1e-6);
+}
+
+TEST(QuadricDecimate, SphereStaysOnTheSphereAndManifold) {
+    Mesh m = test::icosphere(1.0, 5);  // 20480 faces
+    const Mesh input = m;
+    const QemReport r = decimate_mesh_qem(m, {.target_faces = 2000});
+    EXPECT_EQ(r.faces_before, 20480u);
+    EXPECT_LE(r.faces_after, 2000u);
+    EXPECT_GE(r.faces_after, 1990u);  // two faces per collapse
+    EXPECT_EQ(r.faces_after, m.triangles.size());
+    EXPECT_EQ(r.collapses, (20480u - r.faces_after) / 2);
+    const MeshReport mr = mesh_report(m);
+    EXPECT_TRUE(mr.closed && mr.manifold);
+    EXPECT_EQ(mr.euler_characteristic, 2);
+    EXPECT_EQ(mr.referenced_vertices, m.positions.size());
+    EXPECT_GT(mr.volume, 4.0);
+    for (const Vec3f& p : m.positions) EXPECT_NEAR(norm(Vec3d(p)), 1.0, 0.01);
+    const SampledDistance d = sampled_hausdorff(m, input, 3);
+    EXPECT_LT(d.hausdorff, 0.02);
+    EXPECT_GT(r.max_error, 0.0);
+    EXPECT_LT(r.max_error, 0.02);
+}
+
+TEST(QuadricDecimate, TorusKeepsItsGenusAndDecimationIsDeterministic) {
+    const Mesh t = test::torus_mesh(1.0, 0.3, 120, 60);  // genus 1, 14400 faces
+    Mesh a = t, b = t;
+    decimate_mesh_qem(a, {.target_faces = 600});
+    decimate_mesh_qem(b, {.target_faces = 600});
+    EXPECT_EQ(a.positions, b.positions);
+    EXPECT_EQ(a.triangles, b.triangles);
+    const MeshReport mr = mesh_report(a);
+    EXPECT_TRUE(mr.closed && mr.manifold);
+    EXPECT_EQ(mr.euler_characteristic, 0);
+    EXPECT_LE(a.triangles.size(), 600u);
+    // A tetrahedron is as far as a closed component goes.
+    Mesh tiny = test::icosphere(1.0, 0);  // 20 faces
+    decimate_mesh_qem(tiny, {.target_faces = 4});
+    const MeshReport tr = mesh_report(tiny);
+    EXPECT_TRUE(tr.closed && tr.manifold);
+    EXPECT_GE(tiny.triangles.size(), 4u);
+    EXPECT_EQ(tr.euler_characteristic, 2);
+}
+
+TEST(QuadricDecimate, OpenBordersStayAndAttributesFollowTheirVertices) {
+    const Mesh sheet = test::sheet(1.0, 40);  // a flat open square, 3200 faces
+    const std::set<Key> border = border_vertices(sheet);
+    Mesh m = sheet;
+    decimate_mesh_qem(m, {.target_faces = 400});
+    EXPECT_LE(m.triangles.size(), 400u);
+    EXPECT_EQ(border_vertices(m), border);
+    for (const Vec3f& p : m.positions) EXPECT_EQ(p.z, 0.0f);
+    Mesh s = test::attributed_sphere(4);
+    const Mesh input = s;
+    decimate_mesh_qem(s, {.target_faces = 500});
+    ASSERT_EQ(s.colors.size(), s.positions.size());
+    ASSERT_EQ(s.texcoords.size(), s.positions.size());
+    ASSERT_EQ(s.normals.size(), s.positions.size());
+    // each kept vertex carries the attributes of an input vertex within an edge or two of it
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+        double bd = 1e300;
+        for (std::size_t j = 0; j < input.positions.size(); ++j)
+            bd = std::min(bd, squared_norm(Vec3d(input.positions[j]) - Vec3d(s.positions[i])));
+        EXPECT_LT(std::sqrt(bd), 0.3);
+        bool found = false;
+        for (std::size_t j = 0; j < input.positions.size() && !found; ++j)
+            found = input.colors[j] == s.colors[i] && input.texcoords[j] == s.texcoords[i] &&
+                    input.normals[j] == s.normals[i];
+        EXPECT_TRUE(found) << i;
+    }
+}
+
+TEST(QuadricDecimate, BadInputThrows) {
+    Mesh m = test::icosphere(1.0, 1);
+    EXPECT_THROW(decimate_mesh_qem(m, {.target_faces = 3}), InvalidInput);
+    EXPECT_THROW(decimate_mesh_qem(m, {.target_faces = 10, .max_normal_change_deg = 0}), InvalidInput);
+    EXPECT_THROW(decimate_mesh_qem(m, {.target_faces = 10, .min_quality = 1.0}), InvalidInput);
+    Mesh empty;
+    EXPECT_THROW(decimate_mesh_qem(empty, {.target_faces = 10}), InvalidInput);
+    Mesh bad = m;
+    bad.triangles[0][0] = 999;
+    EXPECT_THROW(decimate_mesh_qem(bad, {.target_faces = 10}), InvalidInput);
+}
+
+TEST(DecimateMesh, AutoRunsTheQuadricCollapseAndChecksTheResult) {
+    Mesh m = extracted_sphere(64);
+    const std::size_t faces = m.triangles.size();
+    ASSERT_GT(faces, 20000u);
+    const DecimationReport r = decimate_mesh(m, 3000);
+    EXPECT_EQ(r.decimator, "quadric");
+    EXPECT_EQ(r.fallback, "");
+    EXPECT_EQ(r.faces_before, faces);
+    EXPECT_EQ(r.faces_after, m.triangles.size());
+    EXPECT_LE(r.faces_after, 3000u);
+    EXPECT_GE(r.faces_after, 2700u);
+    EXPECT_TRUE(r.closed);
+    EXPECT_TRUE(r.manifold);
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+    EXPECT_EQ(r.self_intersections, 0);
+#else
+    EXPECT_EQ(r.self_intersections, -1);
+#endif
+    const MeshReport mr = mesh_report(m);
+    EXPECT_TRUE(mr.closed && mr.manifold);
+    // The distance is measured, not estimated: within the 3000-face chord error of the sphere's
+    // re-mesh (voxel 2/64 ≈ 0.03).
+    EXPECT_GT(r.hausdorff, 0.0);
+    EXPECT_LT(r.hausdorff, 0.03);
+    EXPECT_EQ(r.hausdorff, std::max(r.result_to_input, r.input_to_result));
+    EXPECT_GE(r.seconds, r.seconds_decimate);
+}
+
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+TEST(DecimateMesh, CgalOnRequestAndBothWithinTheSameDistance) {
+    const Mesh input = extracted_sphere(64);
+    Mesh a = input, b = input;
+    const DecimationReport ra = decimate_mesh(a, 3000, Decimator::Quadric);
+    const DecimationReport rb = decimate_mesh(b, 3000, Decimator::Cgal);
+    EXPECT_EQ(ra.decimator, "quadric");
+    EXPECT_EQ(rb.decimator, "cgal");
+    EXPECT_TRUE(rb.closed && rb.manifold);
+    EXPECT_EQ(rb.self_intersections, 0);
+    EXPECT_LE(rb.faces_after, 3000u);
+    // Same face budget, same surface: the quadric collapse is as close as CGAL's or closer.
+    EXPECT_LE(ra.hausdorff, 1.1 * rb.hausdorff);
+}
+#endif
+
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+// The folded cortex at a coarse grid, decimated hard: the quadric collapse leaves a few pairs of faces
+// through each other (measured: 3), and Auto hands back a result without any.
+TEST(DecimateMesh, AutoClearsTheSelfIntersectionsOfAFoldedSurface) {
+    const std::string path = std::string(NORMALFLOW_TEST_DATA) + "/medical/brainmesh_icbm152_lh.ply";
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << "shared/data missing";
+    const Mesh brain = read_mesh(path);
+    ScanConvertOptions so;
+    so.resolution = 96;
+    const Mesh ext = extract_surface(scan_convert(brain, *make_bvh_query(brain), so));
+    Mesh q = ext, a = ext;
+    const DecimationReport rq = decimate_mesh(q, 2000, Decimator::Quadric);
+    EXPECT_EQ(rq.decimator, "quadric");
+    EXPECT_TRUE(rq.closed && rq.manifold);
+    ASSERT_GT(rq.self_intersections, 0) << "the premise: this decimation folds the surface through itself";
+    const DecimationReport ra = decimate_mesh(a, 2000);
+    EXPECT_EQ(ra.self_intersections, 0);
+    EXPECT_TRUE(ra.closed && ra.manifold);
+    EXPECT_TRUE(ra.repaired_self_intersections > 0 || !ra.fallback.empty());
+    EXPECT_EQ(count_self_intersections(a), 0u);
+    EXPECT_LE(a.triangles.size(), 2000u);
+}
+#endif
+
+TEST(DecimateMesh, BadInputThrows) {
+    Mesh m = test::icosphere(1.0, 2);
+    EXPECT_THROW(decimate_mesh(m, 3), InvalidInput);
+    Mesh empty;
+    EXPECT_THROW(decimate_mesh(empty, 100), InvalidInput);
+}
+
+#ifdef NORMALFLOW_TEST_CLI
+// smooth --target-faces and cleanup --target-faces decimate with the quadric collapse by default and say so.
+TEST(DecimateMesh, CliReportsTheDecimator) {
+    test::TempDir dir;
+    const std::string in = dir / "sphere.ply", out = dir / "out.ply", json = dir / "r.json";
+    write_mesh(in, test::icosphere(1.0, 4));
+    const std::string cli = NORMALFLOW_TEST_CLI;
+    auto run = [&](const std::string& args) {
+        const std::string cmd = cli + " " + args + " --json > " + json;
+        EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+        return test::slurp(json);
+    };
+    std::string j = run("smooth " + in + " " + out + " --resolution 48 --iterations 1 --target-faces 1500");
+    EXPECT_NE(j.find("\"decimator\":\"quadric\""), std::string::npos) << j;
+    EXPECT_LE(read_mesh(out).triangles.size(), 1500u);
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+    j = run("cleanup " + in + " " + out + " --target-faces 1000");
+    EXPECT_NE(j.find("\"decimator\":\"quadric\""), std::string::npos) << j;
+    EXPECT_LE(read_mesh(out).triangles.size(), 1000u);
+    j = run("cleanup " + in + " " + out + " --target-faces 1000 --decimator cgal");
+    EXPECT_NE(j.find("\"decimator\":\"cgal\""), std::string::npos) << j;
+    EXPECT_LE(read_mesh(out).triangles.size(), 1000u);
+#endif
+    const std::string bad = cli + " smooth " + in + " " + out + " --target-faces 100 --decimator fast 2>/dev/null";
+    EXPECT_NE(std::system(bad.c_str()), 0);
+}
+#endif
+
+}  // namespace
+}  // namespace normalflow
