@@ -373,6 +373,21 @@ TEST(DecimateMesh, CliReportsTheDecimator) {
     j = run("cleanup " + in + " " + out + " --target-faces 1000");
     EXPECT_NE(j.find("\"decimator\":\"quadric\""), std::string::npos) << j;
     EXPECT_LE(read_mesh(out).triangles.size(), 1000u);
+    {  // a soup (every face its own three vertices, as STL files are) is welded first
+        Mesh soup;
+        const Mesh sphere = test::icosphere(1.0, 4);
+        for (const Tri& t : sphere.triangles) {
+            const auto base = std::uint32_t(soup.positions.size());
+            for (int c = 0; c < 3; ++c) soup.positions.push_back(sphere.positions[t[c]]);
+            soup.triangles.push_back({base, base + 1, base + 2});
+        }
+        const std::string soup_path = dir / "soup.ply";
+        write_mesh(soup_path, soup);
+        j = run("cleanup " + soup_path + " " + out + " --target-faces 1000");
+        const Mesh r = read_mesh(out);
+        EXPECT_LE(r.triangles.size(), 1000u) << j;
+        EXPECT_TRUE(mesh_report(r).closed && mesh_report(r).manifold);
+    }
     j = run("cleanup " + in + " " + out + " --target-faces 1000 --decimator cgal");
     EXPECT_NE(j.find("\"decimator\":\"cgal\""), std::string::npos) << j;
     EXPECT_LE(read_mesh(out).triangles.size(), 1000u);
