@@ -9,12 +9,12 @@
 
 #include "core/errors.h"
 #include "core/stopwatch.h"
-#include "extract/surface_attributes.h"
-#include "sdf/closest_triangle.h"
-#include "sdf/memory_estimate.h"
 #include "core/mesh_report.h"
 #include "extract/decimate.h"
+#include "extract/surface_attributes.h"
 #include "metrics/surface_distance.h"
+#include "sdf/closest_triangle.h"
+#include "sdf/memory_estimate.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/aabb_distance.h"
 #endif
