@@ -324,22 +324,34 @@ DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator deci
 #ifdef NORMALFLOW_HAS_CGAL
     if (!done) {
         Stopwatch t;
-        result = m;
+        Mesh other = m;
         cgal::CleanupOptions co;
         co.reduction = cgal::CleanupReduction::FaceCount;
         co.target_faces = target_faces;
-        const cgal::CleanupReport cr = cgal::cleanup_mesh(result, co);
+        const cgal::CleanupReport cr = cgal::cleanup_mesh(other, co);
         rep.seconds_decimate += t.lap();
-        rep.decimator = "cgal";
-        rep.self_intersections = static_cast<long long>(cr.self_intersections);
-        append(rep.warnings, cr.warnings);
-        if (!rep.fallback.empty()) rep.warnings.push_back(rep.fallback);
+        const long long other_pairs = static_cast<long long>(cr.self_intersections);
+        // CGAL's result, unless it breaks more than the quadric one did (at extreme ratios on folded
+        // surfaces both can leave intersecting pairs): then the quadric one, with a warning below.
+        const bool cgal_better = broken_guarantee(input, mesh_report(other), -1).empty() &&
+                                 (other_pairs < rep.self_intersections ||
+                                  !broken_guarantee(input, mesh_report(result), -1).empty());
+        if (cgal_better) {
+            result = std::move(other);
+            rep.decimator = "cgal";
+            rep.self_intersections = other_pairs;
+            append(rep.warnings, cr.warnings);
+            rep.warnings.push_back(rep.fallback);
+        } else {
+            rep.fallback = "CGAL's edge collapse left " + std::to_string(other_pairs) +
+                           " pairs of self-intersecting faces; the quadric decimation's result is kept";
+        }
     }
 #endif
     const MeshReport out = mesh_report(result);
     rep.closed = out.closed;
     rep.manifold = out.manifold;
-    if (rep.decimator != "cgal") {  // CGAL's cleanup reported its own
+    if (rep.decimator != "cgal") {  // CGAL's cleanup reported its own problems
         const std::string why = broken_guarantee(input, out, rep.self_intersections);
         if (!why.empty()) rep.warnings.push_back("decimated result is " + why);
     }

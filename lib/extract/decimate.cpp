@@ -16,6 +16,20 @@
 namespace normalflow {
 namespace {
 
+/// The weight of the edge-length term in a collapse's cost, relative to the quadric error: among
+/// collapses of equal error (a flat patch, where all are zero) the shorter edge goes first, so that a
+/// flat region is decimated evenly instead of into fans of slivers around a few vertices (which also
+/// makes the decimation quadratic there). On fandisk extracted at 256 to 20,000 faces, Hausdorff
+/// distance: 1e-3 0.00767, 1e-4 0.00681; 0 did not finish in a minute (the fans).
+constexpr double kLengthWeight = 1e-4;
+/// The pull of the merged vertex towards the edge's midpoint, relative to the quadric's mean
+/// eigenvalue: small enough to leave a corner where its planes meet, and it picks the point of a
+/// crease line or a flat patch nearest to the midpoint, where the quadric alone has no single minimum.
+constexpr double kRegularisation = 1e-3;
+/// Each pass collapses, cheapest first, among the cheaper half of the edges, those whose two ends and
+/// their neighbours no collapse of the pass has touched (so that each cost is still exact).
+constexpr double kPassFraction = 0.5;
+
 /// Σ w (n·x + d)² over planes: xᵀAx + 2bᵀx + c, A symmetric.
 struct Quadric {
     double a00 = 0, a01 = 0, a02 = 0, a11 = 0, a12 = 0, a22 = 0, b0 = 0, b1 = 0, b2 = 0, c = 0, w = 0;
@@ -42,18 +56,21 @@ struct Quadric {
                          x.y * (a11 * x.y + 2 * (a12 * x.z + b1)) + x.z * (a22 * x.z + 2 * b2) + c;
         return std::max(v, 0.0);
     }
-    /// The minimiser of the quadric, when A is well-conditioned (its three planes' normals span space).
-    bool minimiser(Vec3d& x) const {
-        const double c00 = a11 * a22 - a12 * a12, c01 = a02 * a12 - a01 * a22, c02 = a01 * a12 - a02 * a11;
-        const double det = a00 * c00 + a01 * c01 + a02 * c02;
-        const double tr = a00 + a11 + a22;
-        // Relative test: det = λ1λ2λ3 against (tr/3)³; a crease (rank 2) or a flat patch (rank 1)
-        // leaves det near 0 and the minimiser ill-defined along the crease or the plane.
-                if (!(tr > 0) || !(std::abs(det) > 1e-6 * tr * tr * tr)) return false;
-        const double c11 = a00 * a22 - a02 * a02, c12 = a01 * a02 - a00 * a12, c22 = a00 * a11 - a01 * a01;
+    /// The minimiser of the quadric plus λ|x − c|², λ = kRegularisation · trace(A) / 3: the quadric's own
+    /// minimiser where its planes span space (a corner), the point of the crease line or of the plane
+    /// nearest to c where they do not (a crease, a flat patch). False if the system is singular.
+    bool minimiser_near(const Vec3d& c, Vec3d& x) const {
+        const double lambda = kRegularisation * (a00 + a11 + a22) / 3.0;
+        if (!(lambda > 0)) return false;
+        const double m00 = a00 + lambda, m11 = a11 + lambda, m22 = a22 + lambda;
+        const double r0 = lambda * c.x - b0, r1 = lambda * c.y - b1, r2 = lambda * c.z - b2;
+        const double c00 = m11 * m22 - a12 * a12, c01 = a02 * a12 - a01 * m22, c02 = a01 * a12 - a02 * m11;
+        const double det = m00 * c00 + a01 * c01 + a02 * c02;
+        if (!(std::abs(det) > 0)) return false;
+        const double c11 = m00 * m22 - a02 * a02, c12 = a01 * a02 - m00 * a12, c22 = m00 * m11 - a01 * a01;
         const double inv = 1.0 / det;
-        x = Vec3d(-(c00 * b0 + c01 * b1 + c02 * b2) * inv, -(c01 * b0 + c11 * b1 + c12 * b2) * inv,
-                  -(c02 * b0 + c12 * b1 + c22 * b2) * inv);
+        x = Vec3d((c00 * r0 + c01 * r1 + c02 * r2) * inv, (c01 * r0 + c11 * r1 + c12 * r2) * inv,
+                  (c02 * r0 + c12 * r1 + c22 * r2) * inv);
         return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z);
     }
 };
@@ -74,16 +91,6 @@ double quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, Vec3d* normal) {
     const double l2 = squared_norm(b - a) + squared_norm(c - b) + squared_norm(a - c);
     return l2 > 0 ? 2.0 * std::numbers::sqrt3 * norm(n) / l2 : 0.0;  // 4√3 · area / Σ l², area = |n|/2
 }
-
-/// The weight of the edge-length term in a collapse's cost, relative to the quadric error: among
-/// collapses of equal error (a flat patch, where all are zero) the shorter edge goes first, so that a
-/// flat region is decimated evenly instead of into fans of slivers around a few vertices (which also
-/// makes the decimation quadratic there). On fandisk extracted at 256 to 20,000 faces, Hausdorff
-/// distance: 1e-3 0.00767, 1e-4 0.00681; 0 did not finish in a minute (the fans).
-constexpr double kLengthWeight = 1e-4;
-/// Each pass collapses, cheapest first, among the cheaper half of the edges, those whose two ends and
-/// their neighbours no collapse of the pass has touched (so that each cost is still exact).
-constexpr double kPassFraction = 0.5;
 
 class Decimator {
 public:
@@ -203,17 +210,15 @@ private:
             x = pos_[b];
             return q(x);
         }
-        if (q.minimiser(x)) {
-            // Keep the optimum near the edge: far from it, the quadric's planes no longer describe
-            // the surface (nearly parallel planes of a thin part put it far away).
-            const double len2 = squared_norm(pos_[a] - pos_[b]);
-            const Vec3d mid = (pos_[a] + pos_[b]) * 0.5;
-                        if (squared_norm(x - mid) <= len2) return q(x);
-        }
-        const Vec3d cand[3] = {pos_[a], pos_[b], (pos_[a] + pos_[b]) * 0.5};
+        const Vec3d mid = (pos_[a] + pos_[b]) * 0.5;
+        Vec3d opt;
+        // Keep the optimum near the edge: far from it, the quadric's planes no longer describe the
+        // surface (nearly parallel planes of a thin part put it far away).
+        const bool near = q.minimiser_near(mid, opt) && squared_norm(opt - mid) <= squared_norm(pos_[a] - pos_[b]);
+        const Vec3d cand[4] = {pos_[a], pos_[b], mid, opt};
         double best = q(cand[0]);
         x = cand[0];
-        for (int k = 1; k < 3; ++k) {
+        for (int k = 1; k < (near ? 4 : 3); ++k) {
             const double e = q(cand[k]);
             if (e < best) {
                 best = e;
