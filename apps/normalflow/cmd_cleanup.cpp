@@ -6,12 +6,12 @@
 
 #include "commands.h"
 #include "core/errors.h"
-#include "io/cgal/cleanup.h"  // plain option and report structs; the code needs CGAL
 #include "core/mesh_report.h"
+#include "io/cgal/cleanup.h"  // plain option and report structs; the code needs CGAL
 #include "io/io.h"
 #include "io/pipeline/pipeline.h"
-#include "metrics/surface_distance.h"
 #include "io/pipeline/report_json.h"
+#include "metrics/surface_distance.h"
 
 namespace normalflow::cli {
 namespace {

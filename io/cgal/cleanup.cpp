@@ -321,8 +321,9 @@ CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt) {
                 Mesh candidate = to_mesh(fixed);
                 const MeshReport a = mesh_report(result), b = mesh_report(candidate);
                 // ErrorBound is a promise: a repair that moves the surface beyond it is not kept.
-                const bool within = opt.reduction != CleanupReduction::ErrorBound ||
-                                    sampled_max_distance(candidate, reference, opt.distance_samples_per_face) <= opt.max_error;
+                const bool within =
+                    opt.reduction != CleanupReduction::ErrorBound ||
+                    sampled_max_distance(candidate, reference, opt.distance_samples_per_face) <= opt.max_error;
                 if (!candidate.triangles.empty() && (b.closed || !a.closed) && (b.manifold || !a.manifold) &&
                     within && count_self_intersections(candidate) < before)
                     result = std::move(candidate);

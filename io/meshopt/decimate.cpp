@@ -42,27 +42,10 @@ DecimateReport decimate_mesh(Mesh& m, const DecimateOptions& opt) {
     }
     out.resize(kept);
 
-    // Compact: the referenced vertices in their original order, with their attributes.
-    constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> remap(nv, kUnused);
-    for (unsigned int i : out) remap[i] = 0;
-    std::uint32_t next = 0;
-    for (std::uint32_t& r : remap)
-        if (r != kUnused) r = next++;
-    auto compact = [&](auto& attr) {
-        if (attr.empty()) return;
-        std::size_t w = 0;
-        for (std::size_t v = 0; v < nv; ++v)
-            if (remap[v] != kUnused) attr[w++] = attr[v];
-        attr.resize(w);
-    };
-    compact(m.positions);
-    compact(m.normals);
-    compact(m.colors);
-    compact(m.texcoords);
     m.triangles.resize(kept / 3);
     for (std::size_t f = 0; f < m.triangles.size(); ++f)
-        for (int c = 0; c < 3; ++c) m.triangles[f][c] = remap[out[3 * f + std::size_t(c)]];
+        for (int c = 0; c < 3; ++c) m.triangles[f][c] = out[3 * f + std::size_t(c)];
+    remove_unreferenced_vertices(m);
 
     rep.faces_after = m.triangles.size();
     rep.vertices_after = m.positions.size();

@@ -1,6 +1,7 @@
 #include "core/mesh.h"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "core/errors.h"
@@ -31,6 +32,29 @@ void check_mesh(const Mesh& m, std::string_view who) {
     for (std::size_t i = 0; i < m.texcoords.size(); ++i)
         if (!std::isfinite(m.texcoords[i][0]) || !std::isfinite(m.texcoords[i][1]))
             throw InvalidInput(std::string(who) + ": texture coordinate " + std::to_string(i) + " is not finite");
+}
+
+void remove_unreferenced_vertices(Mesh& m) {
+    constexpr std::uint32_t kUnused = std::numeric_limits<std::uint32_t>::max();
+    const std::size_t nv = m.positions.size();
+    std::vector<std::uint32_t> remap(nv, kUnused);
+    for (const Tri& t : m.triangles)
+        for (const std::uint32_t v : t) remap[v] = 0;
+    std::uint32_t next = 0;
+    for (std::uint32_t& r : remap)
+        if (r != kUnused) r = next++;
+    auto compact = [&](auto& attr) {
+        if (attr.empty()) return;
+        for (std::size_t v = 0; v < nv; ++v)
+            if (remap[v] != kUnused) attr[remap[v]] = attr[v];
+        attr.resize(next);
+    };
+    compact(m.positions);
+    compact(m.normals);
+    compact(m.colors);
+    compact(m.texcoords);
+    for (Tri& t : m.triangles)
+        for (std::uint32_t& v : t) v = remap[v];
 }
 
 }  // namespace normalflow

@@ -71,6 +71,10 @@ struct Box3d {
 /// Cost: one pass over the triangles and one over the positions; single-threaded.
 void check_mesh(const Mesh& m, std::string_view who);
 
+/// Drops the vertices no triangle uses; the others keep their original order and their attributes,
+/// and the triangles are renumbered. Cost: two passes over the triangles and one over the vertices.
+void remove_unreferenced_vertices(Mesh& m);
+
 /// Bounding box of all positions of m.
 inline Box3d bounding_box(const Mesh& m) {
     Box3d b;

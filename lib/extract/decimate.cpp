@@ -92,9 +92,9 @@ double quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, Vec3d* normal) {
     return l2 > 0 ? 2.0 * std::numbers::sqrt3 * norm(n) / l2 : 0.0;  // 4√3 · area / Σ l², area = |n|/2
 }
 
-class Decimator {
+class QemDecimation {
 public:
-    Decimator(Mesh& m, const QemOptions& o) : m_(m), opt_(o) {
+    QemDecimation(Mesh& m, const QemOptions& o) : m_(m), opt_(o) {
         const std::size_t nv = m.positions.size(), nf = m.triangles.size();
         pos_.resize(nv);
         for (std::size_t i = 0; i < nv; ++i) pos_[i] = Vec3d(m.positions[i]);
@@ -332,29 +332,11 @@ private:
     }
 
     void write_back() {
-        std::vector<std::uint32_t> remap(pos_.size(), 0);
-        std::vector<std::uint8_t> used(pos_.size(), 0);
-        for (std::size_t f = 0; f < tris_.size(); ++f)
-            if (alive_f_[f])
-                for (int k = 0; k < 3; ++k) used[tris_[f][k]] = 1;
-        std::uint32_t next = 0;
-        for (std::size_t v = 0; v < pos_.size(); ++v)
-            if (used[v]) remap[v] = next++;
-        auto compact = [&](auto& attr) {
-            if (attr.empty()) return;
-            std::size_t w = 0;
-            for (std::size_t v = 0; v < pos_.size(); ++v)
-                if (used[v]) attr[w++] = attr[v];
-            attr.resize(w);
-        };
         for (std::size_t v = 0; v < pos_.size(); ++v) m_.positions[v] = Vec3f(pos_[v]);
-        compact(m_.positions);
-        compact(m_.normals);
-        compact(m_.colors);
-        compact(m_.texcoords);
         m_.triangles.clear();
         for (std::size_t f = 0; f < tris_.size(); ++f)
-            if (alive_f_[f]) m_.triangles.push_back({remap[tris_[f][0]], remap[tris_[f][1]], remap[tris_[f][2]]});
+            if (alive_f_[f]) m_.triangles.push_back(tris_[f]);
+        remove_unreferenced_vertices(m_);
     }
 
     Mesh& m_;
@@ -383,7 +365,7 @@ QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt) {
                            std::to_string(opt.max_normal_change_deg));
     if (!(opt.min_quality >= 0 && opt.min_quality < 1))
         throw InvalidInput("decimate_mesh: min_quality must be in [0, 1), got " + std::to_string(opt.min_quality));
-    QemReport rep = Decimator(m, opt).run();
+    QemReport rep = QemDecimation(m, opt).run();
     rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return rep;
 }
