@@ -25,6 +25,9 @@ struct VoxelizeArgs {
 
 struct ExtractArgs {
     std::string input, output;
+    std::size_t target_faces = 0;
+    double max_error = 0;
+    Decimator decimator = Decimator::Auto;
     OutputFlags out;
 };
 
@@ -170,11 +173,15 @@ int run_extract(const ExtractArgs& a) {
     const double t_read = clock.seconds();
     PipelineOptions opt;
     opt.smoothing = false;
+    opt.target_faces = a.target_faces;
+    opt.max_error = a.max_error;
+    opt.decimator = a.decimator;
     PipelineReport r;
     const Mesh m = naming(a.input, [&] { return volume_to_mesh(v, opt, &r, &progress); });
     Json j = Json::object();
     j.set("command", "extract").set("extract", to_json(r.extract));
-    j.set("seconds", Json::object().set("read", t_read).set("extract", r.seconds.extract));
+    if (r.decimated) j.set("decimate", to_json(r.decimate));
+    j.set("seconds", Json::object().set("read", t_read).set("extract", r.seconds.extract).set("decimate", r.seconds.decimate));
     j.set("warnings", Json::array(r.warnings));
     write_result(a.output, m, progress, j);
     finish(j, a.out, total, progress);
@@ -222,6 +229,18 @@ int run_smooth(const SmoothArgs& a) {
 
 }  // namespace
 
+/// --target-faces, --max-error and --decimator: the decimation of a re-meshed result (volume_to_mesh).
+void add_decimation_options(CLI::App* cmd, std::size_t& target_faces, double& max_error, Decimator& decimator) {
+    cmd->add_option("--target-faces", target_faces,
+                    "decimate the result to at most N faces (quadric edge collapse, checked; see --decimator)")
+        ->check(CLI::Range(std::size_t(4), std::size_t(1) << 40));
+    cmd->add_option("--max-error", max_error,
+                    "decimate the result while each collapse stays within E (world units) of the surface's tangent "
+                    "planes: an adaptive mesh, coarse where flat (with --target-faces, whichever stops first)")
+        ->check(CLI::PositiveNumber);
+    add_decimator_option(cmd, decimator);
+}
+
 void add_voxelize_command(CLI::App& app) {
     auto a = std::make_shared<VoxelizeArgs>();
     auto* cmd = app.add_subcommand("voxelize", "scan-convert a mesh into a narrow-band signed distance volume");
@@ -239,6 +258,7 @@ void add_extract_command(CLI::App& app) {
     auto* cmd = app.add_subcommand("extract", "extract the zero level set of a volume as a closed manifold mesh");
     cmd->add_option("IN", a->input, "volume file (.vdb or .nrrd)")->required();
     cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
+    add_decimation_options(cmd, a->target_faces, a->max_error, a->decimator);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_extract);
 }
@@ -323,10 +343,7 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--boundary-rings", a->pipeline.fit.boundary_rings,
                     "keep: an open boundary stays, and the vertices within this many edge rings of it move partly")
         ->check(CLI::Range(0, 100000))->capture_default_str();
-    cmd->add_option("--target-faces", a->pipeline.target_faces,
-                    "decimate the result to at most N faces (quadric edge collapse, checked; see --decimator)")
-        ->check(CLI::Range(std::size_t(4), std::size_t(1) << 40));
-    add_decimator_option(cmd, a->pipeline.decimator);
+    add_decimation_options(cmd, a->pipeline.target_faces, a->pipeline.max_error, a->pipeline.decimator);
     add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_smooth);

@@ -85,6 +85,11 @@ void validate(const PipelineOptions& o) {
     if (!std::isfinite(o.extract.iso)) bad_option("extract.iso", str(o.extract.iso), "a finite value");
     if (o.connectivity == Connectivity::Keep && o.target_faces > 0)
         throw InvalidInput("smooth_mesh: target_faces (--target-faces) re-meshes: it needs connectivity remesh or auto");
+    if (!(o.max_error >= 0) || !std::isfinite(o.max_error)) bad_option("max_error", str(o.max_error), ">= 0");
+    if (o.connectivity == Connectivity::Keep && o.max_error > 0)
+        throw InvalidInput("smooth_mesh: max_error (--max-error) re-meshes: it needs connectivity remesh or auto");
+    if (o.max_error > 0 && o.decimator == Decimator::Meshoptimizer)
+        throw InvalidInput("smooth_mesh: max_error (--max-error): meshoptimizer decimates to a face count only");
     if (o.connectivity == Connectivity::Keep && o.closed)
         throw InvalidInput("smooth_mesh: closed (--closed) re-meshes: it needs connectivity remesh or auto");
     if (o.fit.projection_steps < 0) bad_option("fit.projection_steps", str(o.fit.projection_steps), ">= 0");
@@ -196,6 +201,7 @@ Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, Pipelin
 
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
     if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
+    if (!(o.max_error >= 0) || !std::isfinite(o.max_error)) bad_option("max_error", str(o.max_error), ">= 0");
     PipelineReport local;
     PipelineReport& r = report ? *report : local;
     Stopwatch clock;
@@ -208,9 +214,16 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
                                "shrink away); raise --resolution or lower --iterations");
         throw InvalidInput("the volume holds no surface (every sample has the same sign)");
     }
-    if (o.target_faces > 0) {
+    if (o.target_faces > 0 || o.max_error > 0) {
         detail::begin(progress, "decimate");
-        r.decimate = decimate_mesh(m, o.target_faces, o.decimator);
+        // Hermite data: the field's normal at each vertex, so that the quadrics see the surface the
+        // volume holds rather than the extraction's one-voxel bevels at creases (benchmarks/README.md,
+        // "Decimation").
+        set_volume_normals(m, v);
+        r.decimate = decimate_mesh(m, {.target_faces = o.target_faces,
+                                       .max_error = o.max_error,
+                                       .decimator = o.decimator,
+                                       .tangent_planes = true});
         r.decimated = true;
         append(r.warnings, r.decimate.warnings);
         r.seconds.decimate = clock.lap();
@@ -256,10 +269,23 @@ long long self_intersection_pairs([[maybe_unused]] const Mesh& m) {
 }  // namespace
 
 DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator decimator) {
+    if (target_faces < 4) throw InvalidInput("decimate_mesh: target_faces must be >= 4, got " + str(target_faces));
+    return decimate_mesh(m, {.target_faces = target_faces, .decimator = decimator});
+}
+
+DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
     Stopwatch clock;
+    const std::size_t target_faces = options.target_faces;
+    const Decimator decimator = options.decimator;
     check_mesh(m, "decimate_mesh");
     if (m.triangles.empty()) throw InvalidInput("decimate_mesh: empty mesh (no triangles)");
-    if (target_faces < 4) throw InvalidInput("decimate_mesh: target_faces must be >= 4, got " + str(target_faces));
+    if (!(options.max_error >= 0) || !std::isfinite(options.max_error))
+        throw InvalidInput("decimate_mesh: max_error must be finite and >= 0, got " + str(options.max_error));
+    if (target_faces < 4 && !(target_faces == 0 && options.max_error > 0))
+        throw InvalidInput("decimate_mesh: target_faces must be >= 4 (or 0 with max_error > 0), got " +
+                           str(target_faces));
+    if (options.max_error > 0 && decimator == Decimator::Meshoptimizer)
+        throw InvalidInput("decimate_mesh: decimator meshoptimizer decimates to a face count only, not to max_error");
 #ifndef NORMALFLOW_HAS_MESHOPT
     if (decimator == Decimator::Meshoptimizer)
         throw InvalidInput("decimate_mesh: decimator meshoptimizer: needs a build with meshoptimizer");
@@ -277,7 +303,9 @@ DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator deci
     if (decimator == Decimator::Auto || decimator == Decimator::Quadric) {
         Stopwatch t;
         result = m;
-        decimate_mesh_qem(result, {.target_faces = target_faces});
+        decimate_mesh_qem(result, {.target_faces = target_faces,
+                                   .max_error = options.max_error,
+                                   .tangent_planes = options.tangent_planes && m.normals.size() == m.positions.size()});
         rep.seconds_decimate += t.lap();
         rep.decimator = "quadric";
         rep.self_intersections = self_intersection_pairs(result);
@@ -326,8 +354,13 @@ DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator deci
         Stopwatch t;
         Mesh other = m;
         cgal::CleanupOptions co;
-        co.reduction = cgal::CleanupReduction::FaceCount;
-        co.target_faces = target_faces;
+        if (target_faces > 0) {
+            co.reduction = cgal::CleanupReduction::FaceCount;
+            co.target_faces = target_faces;
+        } else {
+            co.reduction = cgal::CleanupReduction::ErrorBound;
+            co.max_error = options.max_error;
+        }
         const cgal::CleanupReport cr = cgal::cleanup_mesh(other, co);
         rep.seconds_decimate += t.lap();
         const long long other_pairs = static_cast<long long>(cr.self_intersections);
@@ -410,7 +443,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.seconds.total += r.seconds.smooth;
     }
     const bool open = has_open_boundary(m);
-    const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && !o.closed;
+    const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && o.max_error == 0 && !o.closed;
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
     Stopwatch fit_clock;
     Mesh fitted;

@@ -145,7 +145,11 @@ struct PipelineOptions {
     /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (decimate_mesh); 0: keep
     /// every triangle. Needs a build with meshoptimizer or CGAL.
     std::size_t target_faces = 0;
-    /// The decimator target_faces runs.
+    /// > 0: decimate the extracted mesh while each collapse stays within this distance (world units) of
+    /// the surface's tangent planes (QemOptions::max_error); with target_faces, whichever stops first.
+    /// An adaptive mesh: few large faces where the surface is flat, small ones where it bends.
+    double max_error = 0;
+    /// The decimator target_faces and max_error run.
     Decimator decimator = Decimator::Auto;
     /// Refuse, before anything big is allocated, a run estimated to need more than this many
     /// bytes; 0: the memory the system has available now (MemAvailable).
@@ -227,6 +231,22 @@ Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, Pipeli
 /// \throw InvalidInput if the volume holds no surface.
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                     Progress* progress = nullptr);
+
+/// What decimate_mesh does.
+struct DecimationOptions {
+    std::size_t target_faces = 0;  ///< faces to keep at most, >= 4; 0: none (then max_error > 0)
+    /// > 0: no collapse beyond this quadric error, world units (QemOptions::max_error); CGAL's fallback then
+    /// bounds its sampled distance to m by it instead (cleanup_mesh, ErrorBound). Not for meshoptimizer.
+    double max_error = 0;
+    Decimator decimator = Decimator::Auto;
+    /// The quadric decimator builds its quadrics from the tangent planes of m.normals (QemOptions::
+    /// tangent_planes): for an extracted surface with the field's normals (set_volume_normals).
+    bool tangent_planes = false;
+};
+
+/// Decimates m in place with options.decimator to at most options.target_faces faces and/or within
+/// options.max_error; see the overload below, which this one generalises.
+DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options);
 
 /// Decimates m in place to at most target_faces faces (>= 4) with the chosen decimator, then checks
 /// the result: closed and manifold where m was, free of self-intersections (builds with CGAL), and its

@@ -29,6 +29,45 @@ constexpr double kRegularisation = 1e-3;
 /// Each pass collapses, cheapest first, among the cheaper half of the edges, those whose two ends and
 /// their neighbours no collapse of the pass has touched (so that each cost is still exact).
 constexpr double kPassFraction = 0.5;
+/// With tangent planes: eigenvalues of a quadric below this fraction of its largest count as zero.
+/// Fandisk extracted at 256 and decimated within 0.03 voxel, mean normal error against the true
+/// fandisk: 0.02 0.83°, 0.1 0.89°, 0.3 0.90° (the regularised solve of the face planes: 0.84°).
+constexpr double kTruncation = 0.02;
+
+/// The eigen-decomposition of a symmetric 3×3 matrix by Jacobi rotations: values w, vectors the
+/// columns of v.
+void symmetric_eigen(double a[3][3], double w[3], double v[3][3]) {
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) v[i][j] = i == j ? 1.0 : 0.0;
+    for (int sweep = 0; sweep < 30; ++sweep) {
+        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if (!(off > 1e-30 * diag)) break;
+        for (int p = 0; p < 2; ++p)
+            for (int q = p + 1; q < 3; ++q) {
+                if (a[p][q] == 0.0) continue;
+                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+                for (int k = 0; k < 3; ++k) {  // a ← a·J
+                    const double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 3; ++k) {  // a ← Jᵀ·a
+                    const double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double vkp = v[k][p], vkq = v[k][q];
+                    v[k][p] = c * vkp - s * vkq;
+                    v[k][q] = s * vkp + c * vkq;
+                }
+            }
+    }
+    for (int i = 0; i < 3; ++i) w[i] = a[i][i];
+}
 
 /// Σ w (n·x + d)² over planes: xᵀAx + 2bᵀx + c, A symmetric.
 struct Quadric {
@@ -73,6 +112,25 @@ struct Quadric {
                   (c02 * r0 + c12 * r1 + c22 * r2) * inv);
         return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z);
     }
+    /// The minimiser nearest to c of the quadric with its eigenvalues below tau × the largest taken as
+    /// zero (Lindstrom 2000; the dual contouring solve of Ju et al. 2002): planes that are nearly parallel
+    /// move the point only across them, never along a crease they do not really make.
+    bool truncated_minimiser_near(const Vec3d& c, double tau, Vec3d& x) const {
+        double a[3][3] = {{a00, a01, a02}, {a01, a11, a12}, {a02, a12, a22}}, w[3], v[3][3];
+        symmetric_eigen(a, w, v);
+        const double top = std::max({w[0], w[1], w[2]});
+        if (!(top > 0)) return false;
+        // gradient/2 at c: A c + b; step −Σ (vᵢ·r)/wᵢ vᵢ over the kept eigenvalues
+        const Vec3d r(a00 * c.x + a01 * c.y + a02 * c.z + b0, a01 * c.x + a11 * c.y + a12 * c.z + b1,
+                      a02 * c.x + a12 * c.y + a22 * c.z + b2);
+        x = c;
+        for (int i = 0; i < 3; ++i) {
+            if (!(w[i] > tau * top)) continue;
+            const Vec3d e(v[0][i], v[1][i], v[2][i]);
+            x = x - e * (dot(e, r) / w[i]);
+        }
+        return std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z);
+    }
 };
 
 struct Candidate {
@@ -104,6 +162,8 @@ public:
         locked_.assign(nv, 0);
         alive_f_.assign(nf, 1);
         tris_ = m.triangles;
+        const bool tangent = o.tangent_planes && m.normals.size() == nv;
+        std::vector<double> area(tangent ? nv : 0, 0.0);
         for (std::uint32_t f = 0; f < nf; ++f) {
             const Tri& t = tris_[f];
             const Vec3d a = pos_[t[0]], b = pos_[t[1]], c = pos_[t[2]];
@@ -111,10 +171,20 @@ public:
             const double len = norm(n);
             if (len > 0) {
                 const Vec3d u = n / len;
-                for (int k = 0; k < 3; ++k) q_[t[k]].add_plane(u, -dot(u, a), 0.5 * len);
+                for (int k = 0; k < 3; ++k) {
+                    if (tangent && squared_norm(Vec3d(m.normals[t[k]])) > 0)
+                        area[t[k]] += len / 6.0;
+                    else
+                        q_[t[k]].add_plane(u, -dot(u, a), 0.5 * len);
+                }
             }
             for (int k = 0; k < 3; ++k) vf_[t[k]].push_back(f);
         }
+        for (std::size_t v = 0; v < area.size(); ++v)
+            if (area[v] > 0) {
+                const Vec3d u = normalized(Vec3d(m.normals[v]));
+                q_[v].add_plane(u, -dot(u, pos_[v]), area[v]);
+            }
         // Edges, with the number of faces on each: border and non-manifold edges lock their ends.
         std::vector<std::uint64_t> keys;
         keys.reserve(3 * nf);
@@ -135,6 +205,7 @@ public:
             if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) locked_[t[0]] = locked_[t[1]] = locked_[t[2]] = 1;
         faces_ = nf;
         cos_max_ = std::cos(opt_.max_normal_change_deg * std::numbers::pi / 180.0);
+        max_error2_ = opt_.max_error * opt_.max_error;
     }
 
     QemReport run() {
@@ -176,6 +247,7 @@ public:
                 std::uint32_t keep = c.u, gone = c.v;
                 Vec3d x;
                 const double error = placement(keep, gone, x);
+                if (max_error2_ > 0 && error > max_error2_ * (q_[keep].w + q_[gone].w)) continue;
                 // keep the endpoint nearer to x (a locked one is x itself): its attributes are closer
                 if (locked_[gone] || (!locked_[keep] && squared_norm(pos_[gone] - x) < squared_norm(pos_[keep] - x)))
                     std::swap(keep, gone);
@@ -193,7 +265,7 @@ public:
         write_back();
         rep.faces_after = m_.triangles.size();
         rep.vertices_after = m_.positions.size();
-        rep.reached_target = rep.faces_after <= opt_.target_faces;
+        rep.reached_target = opt_.target_faces == 0 || rep.faces_after <= opt_.target_faces;
         return rep;
     }
 
@@ -214,7 +286,8 @@ private:
         Vec3d opt;
         // Keep the optimum near the edge: far from it, the quadric's planes no longer describe the
         // surface (nearly parallel planes of a thin part put it far away).
-        const bool near = q.minimiser_near(mid, opt) && squared_norm(opt - mid) <= squared_norm(pos_[a] - pos_[b]);
+        const bool solved = opt_.tangent_planes ? q.truncated_minimiser_near(mid, kTruncation, opt) : q.minimiser_near(mid, opt);
+        const bool near = solved && squared_norm(opt - mid) <= squared_norm(pos_[a] - pos_[b]);
         const Vec3d cand[4] = {pos_[a], pos_[b], mid, opt};
         double best = q(cand[0]);
         x = cand[0];
@@ -348,6 +421,7 @@ private:
     std::vector<Tri> tris_;
     std::size_t faces_ = 0;
     double cos_max_ = 0.5;
+    double max_error2_ = 0.0;
     std::vector<std::uint32_t> shared_, nk_, ng_, common_;
     std::vector<Candidate> slots_;
 };
@@ -358,8 +432,13 @@ QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
     check_mesh(m, "decimate_mesh");
     if (m.triangles.empty()) throw InvalidInput("decimate_mesh: empty mesh (no triangles)");
-    if (opt.target_faces < 4)
-        throw InvalidInput("decimate_mesh: target_faces must be >= 4, got " + std::to_string(opt.target_faces));
+    if (!(opt.max_error >= 0) || !std::isfinite(opt.max_error))
+        throw InvalidInput("decimate_mesh: max_error must be finite and >= 0, got " + std::to_string(opt.max_error));
+    if (opt.target_faces < 4 && !(opt.target_faces == 0 && opt.max_error > 0))
+        throw InvalidInput("decimate_mesh: target_faces must be >= 4 (or 0 with max_error > 0), got " +
+                           std::to_string(opt.target_faces));
+    if (opt.tangent_planes && m.normals.size() != m.positions.size())
+        throw InvalidInput("decimate_mesh: tangent_planes needs a normal per vertex (m.normals)");
     if (!(opt.max_normal_change_deg > 0 && opt.max_normal_change_deg <= 180))
         throw InvalidInput("decimate_mesh: max_normal_change_deg must be in (0, 180], got " +
                            std::to_string(opt.max_normal_change_deg));

@@ -14,8 +14,9 @@ namespace normalflow {
 
 /// Options of decimate_mesh_qem.
 struct QemOptions {
-    /// Faces to keep at most, >= 4. The decimation stops short of it when no collapse is left that
-    /// passes the checks (a closed component keeps at least a tetrahedron; locked borders stay).
+    /// Faces to keep at most, >= 4, or 0 for no face target (then max_error > 0 stops the decimation). The
+    /// decimation stops short of it when no collapse is left that passes the checks (a closed component
+    /// keeps at least a tetrahedron; locked borders stay).
     std::size_t target_faces = 0;
     /// A collapse that turns a face's normal by more than this (degrees, in (0, 180]) is refused: it
     /// would fold the surface onto itself.
@@ -25,6 +26,19 @@ struct QemOptions {
     /// an extracted surface starts with many slivers, and decimating a flat patch passes through thin
     /// triangles (0.05 left an extracted cube at 77k of its 84k faces; 0.001 reaches 300).
     double min_quality = 0.001;
+    /// > 0: no collapse whose quadric error, as a distance (QemReport::max_error's measure: the area-weighted
+    /// RMS distance of the merged vertex to the planes it stands for), exceeds this (world units). Not a
+    /// bound on the Hausdorff distance: io/pipeline decimate_mesh measures that.
+    double max_error = 0.0;
+    /// Hermite data: true to build each vertex's quadric from its own tangent plane, the plane through it
+    /// normal to m.normals (weighted by a third of the area of its faces), instead of the planes of its
+    /// faces. For an extracted surface whose vertices lie on the iso-surface and whose normals come from
+    /// the field (set_volume_normals): collapses across a one-voxel crease bevel then cost nothing and put
+    /// the merged vertex on the crease, where the face planes would keep the bevel as a narrow face.
+    /// Vertices with a zero normal use their faces' planes. The merged vertex is then placed by a
+    /// truncated solve (eigenvalues below 2% of the largest dropped, as dual contouring does), so nearly
+    /// parallel planes do not slide it along a crease they do not make.
+    bool tangent_planes = false;
 };
 
 /// What decimate_mesh_qem did.
@@ -52,8 +66,8 @@ struct QemReport {
 /// Attributes: the surviving vertices keep theirs (a merged vertex keeps the attributes of the endpoint
 /// it replaces), in their original order; unreferenced vertices are dropped. Vertex indices are taken as
 /// the connectivity: weld coincident positions first where they should be joined.
-/// \throw InvalidInput if m breaks the Mesh invariant (check_mesh), has no triangles, or the options are
-///        out of range.
+/// \throw InvalidInput if m breaks the Mesh invariant (check_mesh), has no triangles, the options are
+///        out of range, or tangent_planes is set and m has no normals.
 /// Method: passes; each computes the cost of every edge (TBB parallel), then collapses, cheapest first
 /// among the cheaper half, the edges whose ends and their neighbours no collapse of the pass touched.
 /// Cost: O(F log F) time per pass, a few dozen passes; about 250 bytes per vertex. The result does not
