@@ -218,7 +218,7 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
         detail::begin(progress, "decimate");
         // Hermite data: the field's normal at each vertex, so that the quadrics see the surface the
         // volume holds rather than the extraction's one-voxel bevels at creases (benchmarks/README.md,
-        // "Decimation").
+        // "Sharp extraction").
         set_volume_normals(m, v);
         r.decimate = decimate_mesh(m, {.target_faces = o.target_faces,
                                        .max_error = o.max_error,

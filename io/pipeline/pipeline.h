@@ -143,7 +143,7 @@ struct PipelineOptions {
     /// Extraction of the zero level set.
     ExtractOptions extract;
     /// > 0: decimate the extracted mesh to at most this many faces, >= 4 (decimate_mesh); 0: keep
-    /// every triangle. Needs a build with meshoptimizer or CGAL.
+    /// every triangle.
     std::size_t target_faces = 0;
     /// > 0: decimate the extracted mesh while each collapse stays within this distance (world units) of
     /// the surface's tangent planes (QemOptions::max_error); with target_faces, whichever stops first.
@@ -225,8 +225,9 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& options = {}, P
 Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                       Progress* progress = nullptr);
 
-/// The second half of smooth_mesh: extraction and, with options.target_faces > 0, decimation; the
-/// result has vertex normals from v (set_volume_normals). options.smoothing only selects the message
+/// The second half of smooth_mesh: extraction and, with options.target_faces > 0 or options.max_error > 0,
+/// decimation (decimate_mesh by the tangent planes of v's normals at the vertices); the result has vertex
+/// normals from v (set_volume_normals). options.smoothing only selects the message
 /// when the volume holds no surface.
 /// \throw InvalidInput if the volume holds no surface.
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
