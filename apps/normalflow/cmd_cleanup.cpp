@@ -1,5 +1,4 @@
 // normalflow cleanup IN OUT [--target-faces N | --max-error E | --edge-length L] [--min-component F]
-#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -11,7 +10,6 @@
 #include "io/io.h"
 #include "io/pipeline/pipeline.h"
 #include "io/pipeline/report_json.h"
-#include "metrics/surface_distance.h"
 
 namespace normalflow::cli {
 namespace {
@@ -58,9 +56,10 @@ int run_cleanup(const CleanupArgs& a) {
         r = cgal::cleanup_mesh(m, o);
         r.faces_before = d.faces_before;
         r.vertices_before = d.vertices_before;
-        r.result_to_input = sampled_max_distance(m, input, 3);  // as decimate_mesh measures
-        r.input_to_result = sampled_max_distance(input, m, 0);
-        r.hausdorff = std::max(r.result_to_input, r.input_to_result);
+        const SampledDistance dist = decimation_distance(m, input);  // as decimate_mesh measures
+        r.result_to_input = dist.a_to_b;
+        r.input_to_result = dist.b_to_a;
+        r.hausdorff = dist.hausdorff;
         r.seconds += d.seconds;
         r.warnings.insert(r.warnings.begin(), d.warnings.begin(), d.warnings.end());
     } else {

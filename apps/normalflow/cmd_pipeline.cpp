@@ -25,9 +25,7 @@ struct VoxelizeArgs {
 
 struct ExtractArgs {
     std::string input, output;
-    std::size_t target_faces = 0;
-    double max_error = 0;
-    Decimator decimator = Decimator::Auto;
+    PipelineOptions pipeline;  ///< its decimation options; extraction runs without smoothing
     OutputFlags out;
 };
 
@@ -171,11 +169,8 @@ int run_extract(const ExtractArgs& a) {
     Stopwatch clock;
     const Volume v = read_volume(a.input);
     const double t_read = clock.seconds();
-    PipelineOptions opt;
+    PipelineOptions opt = a.pipeline;
     opt.smoothing = false;
-    opt.target_faces = a.target_faces;
-    opt.max_error = a.max_error;
-    opt.decimator = a.decimator;
     PipelineReport r;
     const Mesh m = naming(a.input, [&] { return volume_to_mesh(v, opt, &r, &progress); });
     Json j = Json::object();
@@ -230,15 +225,15 @@ int run_smooth(const SmoothArgs& a) {
 }  // namespace
 
 /// --target-faces, --max-error and --decimator: the decimation of a re-meshed result (volume_to_mesh).
-void add_decimation_options(CLI::App* cmd, std::size_t& target_faces, double& max_error, Decimator& decimator) {
-    cmd->add_option("--target-faces", target_faces,
+void add_decimation_options(CLI::App* cmd, PipelineOptions& p) {
+    cmd->add_option("--target-faces", p.target_faces,
                     "decimate the result to at most N faces (quadric edge collapse, checked; see --decimator)")
         ->check(CLI::Range(std::size_t(4), std::size_t(1) << 40));
-    cmd->add_option("--max-error", max_error,
+    cmd->add_option("--max-error", p.max_error,
                     "decimate the result while each collapse stays within E (world units) of the surface's tangent "
                     "planes: an adaptive mesh, coarse where flat (with --target-faces, whichever stops first)")
         ->check(CLI::PositiveNumber);
-    add_decimator_option(cmd, decimator);
+    add_decimator_option(cmd, p.decimator);
 }
 
 void add_voxelize_command(CLI::App& app) {
@@ -258,7 +253,7 @@ void add_extract_command(CLI::App& app) {
     auto* cmd = app.add_subcommand("extract", "extract the zero level set of a volume as a closed manifold mesh");
     cmd->add_option("IN", a->input, "volume file (.vdb or .nrrd)")->required();
     cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
-    add_decimation_options(cmd, a->target_faces, a->max_error, a->decimator);
+    add_decimation_options(cmd, a->pipeline);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_extract);
 }
@@ -343,7 +338,7 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--boundary-rings", a->pipeline.fit.boundary_rings,
                     "keep: an open boundary stays, and the vertices within this many edge rings of it move partly")
         ->check(CLI::Range(0, 100000))->capture_default_str();
-    add_decimation_options(cmd, a->pipeline.target_faces, a->pipeline.max_error, a->pipeline.decimator);
+    add_decimation_options(cmd, a->pipeline);
     add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_smooth);

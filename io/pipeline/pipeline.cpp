@@ -268,6 +268,16 @@ long long self_intersection_pairs([[maybe_unused]] const Mesh& m) {
 
 }  // namespace
 
+SampledDistance decimation_distance(const Mesh& result, const Mesh& input) {
+    // From the input (dense: an extraction has vertices a fraction of a voxel apart) its vertices
+    // suffice, from the result 3 more points per face.
+    SampledDistance d;
+    d.a_to_b = sampled_max_distance(result, input, 3);
+    d.b_to_a = sampled_max_distance(input, result, 0);
+    d.hausdorff = std::max(d.a_to_b, d.b_to_a);
+    return d;
+}
+
 DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator decimator) {
     if (target_faces < 4) throw InvalidInput("decimate_mesh: target_faces must be >= 4, got " + str(target_faces));
     return decimate_mesh(m, {.target_faces = target_faces, .decimator = decimator});
@@ -388,11 +398,10 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
         const std::string why = broken_guarantee(input, out, rep.self_intersections);
         if (!why.empty()) rep.warnings.push_back("decimated result is " + why);
     }
-    // Both ways; from the input (dense: an extraction has vertices a fraction of a voxel apart) its
-    // vertices suffice, from the result 3 more points per face.
-    rep.result_to_input = sampled_max_distance(result, m, 3);
-    rep.input_to_result = sampled_max_distance(m, result, 0);
-    rep.hausdorff = std::max(rep.result_to_input, rep.input_to_result);
+    const SampledDistance d = decimation_distance(result, m);
+    rep.result_to_input = d.a_to_b;
+    rep.input_to_result = d.b_to_a;
+    rep.hausdorff = d.hausdorff;
     rep.faces_after = result.triangles.size();
     rep.vertices_after = result.positions.size();
     m = std::move(result);

@@ -19,6 +19,7 @@
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #include "io/pipeline/system_memory.h"
+#include "metrics/surface_distance.h"
 #include "normals/smooth.h"
 #include "sdf/scan_convert.h"
 
@@ -261,6 +262,11 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options);
 /// Cost: fandisk extracted at resolution 256 (1.1 M faces) to 20,000 faces: benchmarks/README.md,
 /// "Decimation" (nf_bench_decimate).
 DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator decimator = Decimator::Auto);
+
+/// The distances decimate_mesh reports between a decimated result and its input (world units): from the
+/// result its vertices and 3 points per face, from the input (dense, so they suffice) its vertices only
+/// (sampled_max_distance both ways).
+SampledDistance decimation_distance(const Mesh& result, const Mesh& input);
 
 /// The median length of the mesh's edges (each triangle's three, so an inner edge counts twice),
 /// world units; 0 for a mesh without triangles. What smooth_mesh takes as the model's length unit

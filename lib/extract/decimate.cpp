@@ -162,7 +162,7 @@ public:
         locked_.assign(nv, 0);
         alive_f_.assign(nf, 1);
         tris_ = m.triangles;
-        const bool tangent = o.tangent_planes && m.normals.size() == nv;
+        const bool tangent = o.tangent_planes;  // decimate_mesh_qem checked that m has a normal per vertex
         std::vector<double> area(tangent ? nv : 0, 0.0);
         for (std::uint32_t f = 0; f < nf; ++f) {
             const Tri& t = tris_[f];
