@@ -1,9 +1,10 @@
 // libFuzzer target for one normalflow reader, chosen at compile time: NF_FUZZ_FORMAT is the file
-// extension without its dot ("obj", "ply", "off", "stl", "glb", "drc", "nrrd", "vdb").
+// extension without its dot ("obj", "ply", "off", "stl", "glb", "drc", "nrrd", "nii", "vdb").
 //
-// Contract under test (issue 7): any byte string either reads into a valid Mesh/Volume or throws
+// Contract under test (issue 7): any byte string either reads into a valid Mesh/Volume/ScalarImage or throws
 // InvalidInput / IoError / OutOfMemory. Any other exception, a crash, a leak, a hang, or a result
 // that breaks the type's invariant (index out of range, non-finite value) is a finding.
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -15,6 +16,7 @@
 
 #include "core/errors.h"
 #include "io/formats/mesh_formats.h"
+#include "io/formats/nifti.h"
 #include "io/io.h"
 
 #ifndef NF_FUZZ_FORMAT
@@ -51,6 +53,19 @@ void check(const Volume& v) {
     }
 }
 
+/// A dense image (read_nifti): dims >= 1, one value per sample, finite values, origin and axes, axes
+/// of non-zero length.
+void check(const ScalarImage& img) {
+    for (int a = 0; a < 3; ++a)
+        if (img.dims[std::size_t(a)] < 1) finding("a reader returned an image with dims < 1");
+    if (img.values.size() != img.sample_count()) finding("a reader returned an image whose values are not dims' product");
+    for (const float x : img.values)
+        if (!std::isfinite(x)) finding("a reader returned an image with a non-finite value");
+    if (!is_finite(img.origin)) finding("a reader returned an image with a non-finite origin");
+    for (const Vec3d& a : img.axes)
+        if (!is_finite(a) || !(norm(a) > 0)) finding("a reader returned an image with a non-finite or zero axis");
+}
+
 /// Readers that only take a path get the bytes through a private temporary file.
 std::string temp_path() {
     static const std::string path = [] {
@@ -76,6 +91,7 @@ void read_one(std::string_view bytes) {
     if (kExt == "off") return check(read_off_memory(bytes, name));
     if (kExt == "stl") return check(read_stl_memory(bytes, name));
     const std::string path = through_file(bytes);
+    if (kExt == "nii") return check(read_nifti(path));
     if (is_volume_path(path)) return check(read_volume(path));
     return check(read_mesh(path));
 }

@@ -8,6 +8,8 @@
 /// Every error is thrown (IoError for the file system, InvalidInput for bad contents) with a
 /// message that names the file and the problem.
 
+#include <array>
+#include <optional>
 #include <string>
 
 #include "core/mesh.h"
@@ -38,11 +40,47 @@ Mesh read_mesh(const std::string& path, ReadInfo* info = nullptr);
 ///        options out of range; IoError if the file cannot be written.
 void write_mesh(const std::string& path, const Mesh& m, const WriteOptions& opt = {});
 
-/// True for .vdb and .nrrd paths.
+/// True for the volume files read_volume reads: .vdb, .nrrd, .nhdr, .nii and .nii.gz.
 bool is_volume_path(const std::string& path);
+/// True for the volume files write_volume writes: .vdb and .nrrd.
+bool is_volume_output_path(const std::string& path);
 
-/// Reads a signed distance volume from .nrrd or .vdb (the first float grid).
+/// Reads a signed distance volume from .nrrd or .vdb (the first float grid): read_volume with no VolumeInput.
 Volume read_volume(const std::string& path);
+
+/// How read_volume reads the values of a dense volume file (.nrrd, .nhdr, .nii, .nii.gz): the command
+/// line's --iso, --label, --negate and --voxel-size.
+struct VolumeInput {
+    /// A scalar image (CT, MRI, a probability or a density): the surface is {value == iso}, inside where the
+    /// value is above it, as isosurface tools take it (negate: below it).
+    std::optional<double> iso;
+    std::optional<double> label;  ///< a label map: the surface of {value == label} (ImageSurface::label)
+    /// Flips the inside: with iso, inside is below it; without, the file's signed distance is positive inside.
+    bool negate = false;
+    double voxel_size = 0;        ///< > 0: resample to this voxel size (world units); 0: the smallest spacing
+};
+
+/// What read_volume found and did.
+struct VolumeReadInfo {
+    std::string format;                 ///< "nrrd", "nifti" or "vdb"
+    std::array<int, 3> dims{0, 0, 0};   ///< the file's samples along its axes
+    std::array<double, 3> spacing{0, 0, 0};  ///< the file's spacing along its axes, world units
+    std::string surface;                ///< how the values were read: "signed distance", "iso 0.5", "label 3", ...
+    bool resampled = false;             ///< resampled to isotropic voxels (image_to_volume)
+    bool placed = false;                ///< rotated or reflected axes: the grid carries a Placement
+};
+
+/// Reads a volume file as a narrow-band signed distance volume, negative inside.
+/// - .vdb: the first float grid (read_vdb): a level set as it is, a fog volume at its 0.5 level.
+///   VolumeInput must be empty (a level set has its surface already).
+/// - .nrrd, .nhdr, .nii, .nii.gz: a dense image (read_nrrd_image, read_nifti), made a signed distance
+///   by image_to_volume with in.iso (inside above it) / in.label / in.negate, resampled to isotropic voxels (in.voxel_size, or
+///   the smallest spacing) and placed where the file says (Grid::placement for rotated or reflected axes).
+///   With neither iso nor label: a binary mask (two values, one of them 0) is the mask of its other value;
+///   otherwise a NRRD holds a signed distance (read exactly by read_nrrd when its voxels are isotropic), and
+///   a NIfTI file is refused with a message that asks for --iso or --label.
+/// 	hrow InvalidInput naming the file (bad contents, contradicting options, no surface); IoError.
+Volume read_volume(const std::string& path, const VolumeInput& in, VolumeReadInfo* info = nullptr);
 
 /// Writes v as .nrrd (dense, band values and ±background elsewhere) or .vdb (sparse level set).
 void write_volume(const std::string& path, const Volume& v);

@@ -26,12 +26,14 @@ struct VoxelizeArgs {
 struct ExtractArgs {
     std::string input, output;
     PipelineOptions pipeline;  ///< its decimation options; extraction runs without smoothing
+    VolumeInput volume;        ///< how a dense volume file's values are read
     OutputFlags out;
 };
 
 struct SmoothArgs {
     std::string input, output;
     PipelineOptions pipeline;
+    VolumeInput volume;                ///< how a dense volume file's values are read (a volume input)
     DracoOptions draco;                ///< quantization and level for .drc / .glb outputs
     OutputFlags out;
 };
@@ -45,7 +47,7 @@ void add_grid_options(CLI::App* cmd, PipelineOptions& p) {
                                     : "voxels along the longest bounding-box side")
                     ->check(CLI::Range(8, 8192));
     if (p.scan.resolution != 0) res->capture_default_str();
-    cmd->add_option("--voxel-size", p.scan.voxel_size, "voxel size in world units (overrides --resolution)")
+    cmd->add_option("--voxel-size", p.scan.voxel_size, "voxel size in world units (overrides --resolution; a volume input is resampled to it)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--shell", p.scan.shell_thickness,
                     "process an open sheet as a shell of this thickness (world units)")
@@ -70,6 +72,43 @@ void add_grid_options(CLI::App* cmd, PipelineOptions& p) {
             "SIZE"));
     cmd->add_option("--threads", p.scan.threads, "worker threads (0: all cores); results do not depend on it")
         ->check(CLI::NonNegativeNumber);
+}
+
+/// --iso, --label, --negate (and --voxel-size for extract): how a dense volume file's values are read.
+void add_volume_input_options(CLI::App* cmd, VolumeInput& v, bool voxel_size) {
+    cmd->add_option("--iso", v.iso,
+                    "volume input: a scalar image (CT, MRI, probability): the surface where the value is V, inside "
+                    "where it is above");
+    cmd->add_option("--label", v.label, "volume input: a label map: the surface of the voxels labelled L");
+    cmd->add_flag("--negate", v.negate,
+                  "volume input: flip the inside (with --iso: below V; a signed distance: positive inside)");
+    if (voxel_size)
+        cmd->add_option("--voxel-size", v.voxel_size,
+                        "volume input: resample to this voxel size (world units; default: the smallest spacing)")
+            ->check(CLI::PositiveNumber);
+}
+
+/// The "input" object of a volume file.
+Json volume_input_json(const std::string& file, const VolumeReadInfo& info, const Volume& v) {
+    Json in = Json::object();
+    in.set("file", file).set("format", info.format)
+        .set("dims", Json::array(std::vector<int>(info.dims.begin(), info.dims.end())))
+        .set("spacing", Json::array(std::vector<double>(info.spacing.begin(), info.spacing.end())))
+        .set("surface", info.surface).set("resampled", info.resampled).set("placed", info.placed);
+    Json grid = Json::object();
+    grid.set("dims", Json::array(std::vector<int>(v.grid.dims.begin(), v.grid.dims.end())))
+        .set("voxel_size", v.grid.voxel_size).set("blocks", v.block_count());
+    in.set("grid", grid);
+    return in;
+}
+
+/// Writes a volume, timed into j["seconds"]["write"], and j["output"].
+void write_volume_result(const std::string& output, const Volume& v, TerminalProgress& progress, Json& j) {
+    Stopwatch clock;
+    progress.begin("write");
+    write_volume(output, v);
+    j.set("output", Json::object().set("file", output).set("blocks", v.block_count()));
+    j["seconds"].set("write", clock.seconds());
 }
 
 /// Runs f; a library error that does not name the file yet gets `file: ` in front.
@@ -137,7 +176,7 @@ void finish(Json& j, const OutputFlags& f, const Stopwatch& total, TerminalProgr
 int run_voxelize(const VoxelizeArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
-    if (!is_volume_path(a.output))
+    if (!is_volume_output_path(a.output))
         throw InvalidInput("voxelize: " + a.output + ": the output must be a .vdb or .nrrd file");
     PipelineOptions opt = a.pipeline;
     opt.smoothing = false;
@@ -167,7 +206,7 @@ int run_extract(const ExtractArgs& a) {
     TerminalProgress progress(a.out);
     progress.begin("read");
     Stopwatch clock;
-    const Volume v = read_volume(a.input);
+    const Volume v = read_volume(a.input, a.volume);
     const double t_read = clock.seconds();
     PipelineOptions opt = a.pipeline;
     opt.smoothing = false;
@@ -184,6 +223,46 @@ int run_extract(const ExtractArgs& a) {
     return 0;
 }
 
+/// smooth with a volume file in: read (iso, label, resampling, placement), the engine, then the volume or
+/// its extracted surface out.
+int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out, const Stopwatch& total,
+                      TerminalProgress& progress) {
+    if (opt.scan.resolution != 0)
+        throw InvalidInput("smooth: " + a.input +
+                           ": --resolution applies to a mesh input; a volume keeps its grid (--voxel-size resamples it)");
+    VolumeInput vin = a.volume;
+    vin.voxel_size = opt.scan.voxel_size;
+    opt.scan.voxel_size = 0;
+    progress.begin("read");
+    Stopwatch clock;
+    VolumeReadInfo info;
+    Volume v = read_volume(a.input, vin, &info);
+    const double t_read = clock.lap();
+    const PipelineResult result =
+        naming(a.input, [&] { return smooth_volume_input(v, opt, &progress, /*want_mesh=*/!volume_out); });
+    const PipelineReport& r = result.report;
+    Json j = Json::object();
+    j.set("command", "smooth").set("mode", to_string(opt.smooth.mode)).set("input", volume_input_json(a.input, info, v));
+    j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
+    if (!volume_out) j.set("extract", to_json(r.extract));
+    if (r.decimated) j.set("decimate", to_json(r.decimate));
+    Json sec = Json::object();
+    sec.set("read", t_read).set("smooth", r.seconds.smooth);
+    if (!volume_out) sec.set("extract", r.seconds.extract).set("decimate", r.seconds.decimate);
+    j.set("seconds", sec).set("warnings", Json::array(r.warnings));
+    if (volume_out) {
+        write_volume_result(a.output, v, progress, j);
+    } else {
+        write_result(a.output, result.mesh, progress, j, a.draco);
+    }
+    finish(j, a.out, total, progress);
+    progress.note("smooth: " + a.output + " (" +
+                  (volume_out ? "the smoothed volume, " + std::to_string(v.block_count()) + " blocks"
+                              : std::to_string(result.mesh.triangles.size()) + " triangles") +
+                  ")");
+    return 0;
+}
+
 int run_smooth(const SmoothArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
@@ -192,13 +271,30 @@ int run_smooth(const SmoothArgs& a) {
     opt.smooth.threads = opt.scan.threads;  // --threads sets both stages
     validate(opt);
     // Fail on a bad output path before the long computation.
-    if (mesh_format_from_path(a.output) == MeshFormat::Unknown)
-        throw InvalidInput("smooth: " + a.output + ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc)");
+    const bool volume_out = is_volume_output_path(a.output);
+    if (!volume_out && mesh_format_from_path(a.output) == MeshFormat::Unknown)
+        throw InvalidInput("smooth: " + a.output +
+                           ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc; .vdb or .nrrd for the volume)");
+    if (is_volume_path(a.input)) return run_smooth_volume(a, opt, volume_out, total, progress);
+    if (a.volume.iso || a.volume.label || a.volume.negate)
+        throw InvalidInput("smooth: " + a.input + ": --iso, --label and --negate apply to a volume input");
     progress.begin("read");
     Stopwatch clock;
     ReadInfo info;
     const Mesh mesh = read_mesh(a.input, &info);
     const double t_read = clock.lap();
+    if (volume_out) {
+        // the smoothed volume itself: scan conversion and the engine, no extraction
+        PipelineReport r;
+        Volume v = naming(a.input, [&] { return mesh_to_volume(mesh, opt, &r, &progress); });
+        naming(a.input, [&] { smooth_volume_stage(v, opt, model_length_scale(mesh), &r, &progress); });
+        Json j = report_json("smooth", r, t_read, &info);
+        j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
+        write_volume_result(a.output, v, progress, j);
+        finish(j, a.out, total, progress);
+        progress.note("smooth: " + a.output + " (the smoothed volume, " + std::to_string(v.block_count()) + " blocks)");
+        return 0;
+    }
     const PipelineResult result = naming(a.input, [&] { return smooth_mesh(mesh, opt, &progress); });
     const PipelineReport& r = result.report;
     const Mesh& m = result.mesh;
@@ -251,8 +347,9 @@ void add_voxelize_command(CLI::App& app) {
 void add_extract_command(CLI::App& app) {
     auto a = std::make_shared<ExtractArgs>();
     auto* cmd = app.add_subcommand("extract", "extract the zero level set of a volume as a closed manifold mesh");
-    cmd->add_option("IN", a->input, "volume file (.vdb or .nrrd)")->required();
+    cmd->add_option("IN", a->input, "volume file (.vdb, .nrrd, .nhdr, .nii, .nii.gz)")->required();
     cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
+    add_volume_input_options(cmd, a->volume, /*voxel_size=*/true);
     add_decimation_options(cmd, a->pipeline);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_extract);
@@ -262,9 +359,12 @@ void add_smooth_command(CLI::App& app) {
     auto a = std::make_shared<SmoothArgs>();
     SmoothOptions& s = a->pipeline.smooth;
     auto* cmd = app.add_subcommand("smooth", "voxelize, filter the normal map and refit, extract (the whole pipeline)");
-    cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
-    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
+    cmd->add_option("IN", a->input,
+                    "mesh file (obj, ply, off, stl, gltf, glb, drc) or volume file (vdb, nrrd, nhdr, nii, nii.gz)")
+        ->required();
+    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc) or volume file (vdb, nrrd)")->required();
     add_grid_options(cmd, a->pipeline);
+    add_volume_input_options(cmd, a->volume, /*voxel_size=*/false);
     std::map<std::string, SmoothMode> modes;
     for (SmoothMode m : {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature,
                          SmoothMode::Bilateral, SmoothMode::Guided, SmoothMode::TotalVariation})

@@ -1,5 +1,7 @@
 #include "io/formats/nrrd.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <bit>
 #include <cctype>
@@ -9,9 +11,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <map>
 #include <memory>
+#include <new>
 #include <optional>
 #include <string>
 #include <vector>
@@ -77,24 +81,48 @@ struct FileCloser {
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
-/// Parser state for one NRRD file; every error names the file.
+/// Where the samples of a NRRD file lie, as its header says: sample (i, j, k) at origin + i·axes[0] +
+/// j·axes[1] + k·axes[2].
+struct NrrdGeometry {
+    enum class From { Default, Spacings, Directions } from = From::Default;
+    std::array<Vec3d, 3> axes{Vec3d{1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, 0, 1}};
+    Vec3d origin;
+    std::string text;  ///< the spacings or space directions field as written, for messages
+};
+
+/// Parser state for one NRRD file (and its detached data file); every error names the header file
+/// and starts with `who` (read_nrrd, read_nrrd_image).
+///
+/// Use: parse_header(), geometry(), open_data(), then read_samples() until every sample is read.
 class NrrdReader {
 public:
-    NrrdReader(const std::string& path, const VolumeReadOptions& opt) : path_(path), opt_(opt) {}
+    NrrdReader(const std::string& path, const char* who) : path_(path), who_(who) {}
 
-    Volume read();
+    /// Streams the samples into a narrow-band Volume (read_nrrd).
+    Volume read_volume(const VolumeReadOptions& opt);
+    /// Reads every sample into a dense image (read_nrrd_image).
+    ScalarImage read_image();
 
 private:
-    [[noreturn]] void bad(const std::string& what) const { throw InvalidInput("read_nrrd: " + path_ + ": " + what); }
+    [[noreturn]] void bad(const std::string& what) const { throw InvalidInput(who_ + ": " + path_ + ": " + what); }
     [[noreturn]] void bad_line(const std::string& what) const {
         bad("line " + std::to_string(line_no_) + ": " + what);
     }
+    [[noreturn]] void io_error(const std::string& what) const { throw IoError(who_ + ": " + path_ + ": " + what); }
 
-    bool read_line(std::string& line);
+    /// Opens the header file and parses the header; the stream is left at the first byte after it.
     void parse_header();
+    bool read_line(std::string& line);
     std::vector<double> parse_numbers(const std::string& s, std::size_t expected, const char* field);
     std::vector<std::optional<std::array<double, 3>>> parse_vectors(const std::string& s);
-    void setup_geometry(Grid& g);
+    /// The geometry fields, parsed (finite numbers, three spatial axes), not yet judged.
+    NrrdGeometry geometry();
+    /// Opens the detached data file if there is one, applies line skip and byte skip, and checks that
+    /// the data can hold what the sizes claim (before anything is allocated).
+    void open_data();
+    std::uint64_t sample_count() const {
+        return std::uint64_t(sizes_[0]) * std::uint64_t(sizes_[1]) * std::uint64_t(sizes_[2]);
+    }
 
     // Data sources: fill exactly `bytes` bytes or throw.
     void read_raw(void* dst, std::size_t bytes);
@@ -103,14 +131,15 @@ private:
     void read_samples(double* dst, std::size_t count);
 
     std::string path_;
-    VolumeReadOptions opt_;
+    std::string who_;
     FilePtr f_;
-    std::uint64_t file_size_ = 0;
+    std::uint64_t file_size_ = 0;   // of the file f_ reads: the header file, then the data file
     std::size_t header_bytes_ = 0;
     int line_no_ = 0;
 
     std::map<std::string, std::string> fields_;  // lower-case field name -> description
     std::map<std::string, std::string> keys_;    // key:=value pairs
+    std::string data_file_;                      // detached data file as written, or empty
     Scalar type_ = Scalar::F32;
     std::array<std::int64_t, 3> sizes_{0, 0, 0};
     enum class Encoding { Raw, Gzip, Ascii } encoding_ = Encoding::Raw;
@@ -148,6 +177,15 @@ bool NrrdReader::read_line(std::string& line) {
 }
 
 void NrrdReader::parse_header() {
+    f_.reset(std::fopen(path_.c_str(), "rb"));
+    if (!f_) io_error(std::string("cannot open (") + std::strerror(errno) + ")");
+    if (std::fseek(f_.get(), 0, SEEK_END) != 0) io_error("cannot seek (not a regular file?)");
+    const long fs = std::ftell(f_.get());
+    if (fs < 0) io_error("cannot determine the file size");
+    file_size_ = std::uint64_t(fs);
+    std::rewind(f_.get());
+    if (file_size_ == 0) bad("empty file");
+
     std::string line;
     if (!read_line(line)) bad("empty file");
     if (line.size() != 8 || line.compare(0, 7, "NRRD000") != 0 || line[7] < '1' || line[7] > '5')
@@ -166,15 +204,23 @@ void NrrdReader::parse_header() {
         const std::string name = lower(trim(line.substr(0, colon)));
         if (fields_.count(name)) bad_line("field \"" + name + "\" given twice");
         fields_[name] = trim(line.substr(colon + 2));
+        // "data file: LIST" is the last field: the file names follow it, one a line.
+        if ((name == "data file" || name == "datafile") && (fields_[name] == "LIST" || fields_[name].rfind("LIST ", 0) == 0))
+            bad_line("data file: LIST (a list of data files after the header) is not supported; use a single data file");
     }
-    if (!blank) {
-        // A header must end with a blank line before attached data; without one the file is truncated,
-        // unless the data is detached (which we reject below with a clearer message).
-        if (!fields_.count("data file") && !fields_.count("datafile")) bad("truncated header (no blank line before the data)");
+    // Detached data: one file, named relative to the header's folder (or absolute).
+    if (fields_.count("data file") && fields_.count("datafile")) bad("both \"data file\" and \"datafile\" given");
+    if (const auto it = fields_.count("data file") ? fields_.find("data file") : fields_.find("datafile");
+        it != fields_.end()) {
+        const std::string& d = it->second;
+        if (d.empty()) bad("data file: no file name given");
+        if (d.find('%') != std::string::npos)
+            bad("data file: \"" + d + "\" is a format string naming several data files; only a single data file is supported");
+        data_file_ = d;
     }
+    // A header must end with a blank line before attached data; without one the file is truncated.
+    if (!blank && data_file_.empty()) bad("truncated header (no blank line before the data)");
 
-    if (fields_.count("data file") || fields_.count("datafile"))
-        bad("detached data files (\"data file:\") are not supported; use an attached header (.nrrd)");
     auto need = [&](const char* name) -> const std::string& {
         const auto it = fields_.find(name);
         if (it == fields_.end()) bad(std::string("missing required field \"") + name + "\"");
@@ -288,57 +334,52 @@ std::vector<std::optional<std::array<double, 3>>> NrrdReader::parse_vectors(cons
     return out;
 }
 
-void NrrdReader::setup_geometry(Grid& g) {
+NrrdGeometry NrrdReader::geometry() {
     if (const auto it = fields_.find("space dimension"); it != fields_.end() && trim(it->second) != "3")
         bad("space dimension is " + it->second + ", expected 3");
     if (const auto it = fields_.find("space"); it != fields_.end() && lower(it->second).find("time") != std::string::npos)
         bad("space \"" + it->second + "\" has a time axis; expected a 3-D space");
-    double h = 1.0;
-    Vec3d origin{};
+    NrrdGeometry geo;
     if (const auto it = fields_.find("space directions"); it != fields_.end()) {
         const auto dirs = parse_vectors(it->second);
         if (dirs.size() != 3) bad("space directions: expected 3 vectors, found " + std::to_string(dirs.size()));
-        double sp[3];
         for (int a = 0; a < 3; ++a) {
-            if (!dirs[a]) bad("space directions: axis " + std::to_string(a) + " is \"none\"; expected 3 spatial axes");
-            const auto& d = *dirs[a];
-            for (int b = 0; b < 3; ++b)
-                if (b != a && d[b] != 0.0)
-                    bad("space directions are not axis-aligned (" + it->second +
-                        "); only grids aligned with x, y, z in that order are supported");
-            if (!(d[a] > 0)) bad("space directions: axis " + std::to_string(a) + " has non-positive step " +
-                                 std::to_string(d[a]) + "; flipped axes are not supported");
-            sp[a] = d[a];
+            if (!dirs[std::size_t(a)])
+                bad("space directions: axis " + std::to_string(a) + " is \"none\"; expected 3 spatial axes");
+            const auto& d = *dirs[std::size_t(a)];
+            geo.axes[std::size_t(a)] = {d[0], d[1], d[2]};
+            const double n = norm(geo.axes[std::size_t(a)]);
+            if (!(n > 0) || !std::isfinite(n))
+                bad("space directions: axis " + std::to_string(a) + " has no length (" + it->second + ")");
         }
-        h = sp[0];
-        if (std::abs(sp[1] - h) > 1e-5 * h || std::abs(sp[2] - h) > 1e-5 * h)
-            bad("anisotropic spacing (" + it->second + "); isotropic voxels are required");
+        geo.from = NrrdGeometry::From::Directions;
+        geo.text = it->second;
     } else if (const auto sit = fields_.find("spacings"); sit != fields_.end()) {
         const auto v = parse_numbers(sit->second, 3, "spacings");
-        for (int a = 0; a < 3; ++a)
-            if (!(v[a] > 0)) bad("spacings: axis " + std::to_string(a) + " is not positive");
-        h = v[0];
-        if (std::abs(v[1] - h) > 1e-5 * h || std::abs(v[2] - h) > 1e-5 * h)
-            bad("anisotropic spacings (" + sit->second + "); isotropic voxels are required");
+        for (int a = 0; a < 3; ++a) {
+            if (v[std::size_t(a)] == 0) bad("spacings: axis " + std::to_string(a) + " is 0");
+            geo.axes[std::size_t(a)] = Vec3d{};
+            geo.axes[std::size_t(a)][a] = v[std::size_t(a)];
+        }
         if (const auto mit = fields_.find("axis mins"); mit != fields_.end()) {
             const auto m = parse_numbers(mit->second, 3, "axis mins");
-            origin = {m[0], m[1], m[2]};
+            geo.origin = {m[0], m[1], m[2]};
         }
+        geo.from = NrrdGeometry::From::Spacings;
+        geo.text = sit->second;
     }
     if (const auto it = fields_.find("space origin"); it != fields_.end()) {
         const auto o = parse_vectors(it->second);
         if (o.size() != 1 || !o[0]) bad("space origin: expected one vector \"(x,y,z)\", found \"" + it->second + "\"");
-        origin = {(*o[0])[0], (*o[0])[1], (*o[0])[2]};
+        geo.origin = {(*o[0])[0], (*o[0])[1], (*o[0])[2]};
     }
-    g.origin = origin;
-    g.voxel_size = h;
-    for (int a = 0; a < 3; ++a) g.dims[a] = int(sizes_[a]);
+    return geo;
 }
 
 void NrrdReader::read_raw(void* dst, std::size_t bytes) {
     const std::size_t got = std::fread(dst, 1, bytes, f_.get());
     if (got != bytes) {
-        if (std::ferror(f_.get())) throw IoError("read_nrrd: " + path_ + ": read error (" + std::strerror(errno) + ")");
+        if (std::ferror(f_.get())) io_error(std::string("read error (") + std::strerror(errno) + ")");
         bad("truncated data after sample " + std::to_string(samples_read_ + got / scalar_bytes(type_)));
     }
 }
@@ -365,7 +406,7 @@ void NrrdReader::read_gzip(void* dst, std::size_t bytes) {
             if (zs.avail_in == 0) {
                 const std::size_t n = std::fread(z_->in.data(), 1, z_->in.size(), f_.get());
                 if (n == 0) {
-                    if (std::ferror(f_.get())) throw IoError("read_nrrd: " + path_ + ": read error (" + std::strerror(errno) + ")");
+                    if (std::ferror(f_.get())) io_error(std::string("read error (") + std::strerror(errno) + ")");
                     bad("truncated gzip data (file ends before sample " + std::to_string(samples_read_) + " was complete)");
                 }
                 zs.next_in = z_->in.data();
@@ -444,68 +485,50 @@ void NrrdReader::read_samples(double* dst, std::size_t count) {
     samples_read_ += count;
 }
 
-Volume NrrdReader::read() {
-    if (!(opt_.half_width >= 0) || !std::isfinite(opt_.half_width))
-        bad("half_width " + std::to_string(opt_.half_width) + " is out of range (expected > 0 voxels, or 0 for the default)");
-    if (!std::isfinite(opt_.iso)) bad("iso value is not finite");
-    f_.reset(std::fopen(path_.c_str(), "rb"));
-    if (!f_) throw IoError("read_nrrd: " + path_ + ": cannot open (" + std::strerror(errno) + ")");
-    if (std::fseek(f_.get(), 0, SEEK_END) != 0) throw IoError("read_nrrd: " + path_ + ": cannot seek (not a regular file?)");
-    const long fs = std::ftell(f_.get());
-    if (fs < 0) throw IoError("read_nrrd: " + path_ + ": cannot determine the file size");
-    file_size_ = std::uint64_t(fs);
-    std::rewind(f_.get());
-    if (file_size_ == 0) bad("empty file");
-
-    parse_header();
-    Grid g;
-    setup_geometry(g);
-
-    // Half width and background: positive, and checked against the float range (a finite double such
-    // as 2e128 would become +Inf as a float).
-    auto positive_float = [&](const char* key) {
-        const auto v = parse_numbers(keys_.at(key), 1, key);
-        if (!(v[0] > 0) || !(v[0] <= std::numeric_limits<float>::max()))
-            bad(std::string(key) + " must be > 0 and fit in a float");
-        return float(v[0]);
-    };
-    float half_width = opt_.half_width;
-    if (half_width == 0) {
-        half_width = 3.f;
-        if (keys_.count("normalflow_half_width")) half_width = positive_float("normalflow_half_width");
+void NrrdReader::open_data() {
+    std::string where;  // "data file NAME: " in messages about a detached data file
+    if (!data_file_.empty()) {
+        namespace fs = std::filesystem;
+        const fs::path p = fs::path(data_file_).is_absolute() ? fs::path(data_file_)
+                                                                : fs::path(path_).parent_path() / data_file_;
+        where = "data file " + p.string() + ": ";
+        struct stat st {};
+        if (::stat(p.c_str(), &st) != 0)
+            io_error(where + "cannot open (" + std::strerror(errno) + ")");
+        if (!S_ISREG(st.st_mode)) io_error(where + "not a regular file");
+        f_.reset(std::fopen(p.c_str(), "rb"));
+        if (!f_) io_error(where + "cannot open (" + std::strerror(errno) + ")");
+        file_size_ = std::uint64_t(st.st_size);
     }
-    Volume vol(g, half_width);
-    if (keys_.count("normalflow_background")) vol.background = positive_float("normalflow_background");
-    const double band = double(half_width) * g.voxel_size;
-
-    // Position at the data and check that the file can hold what the sizes claim, before allocating.
-    const std::uint64_t nx = std::uint64_t(sizes_[0]), ny = std::uint64_t(sizes_[1]), nz = std::uint64_t(sizes_[2]);
-    const std::uint64_t count = nx * ny * nz;
+    const std::uint64_t count = sample_count();
     const std::uint64_t need = count * scalar_bytes(type_);
     for (std::int64_t l = 0; l < line_skip_; ++l) {
         int c;
         while ((c = std::fgetc(f_.get())) != EOF && c != '\n') {}
-        if (c == EOF) bad("line skip " + std::to_string(line_skip_) + " runs past the end of the file");
+        if (c == EOF) bad(where + "line skip " + std::to_string(line_skip_) + " runs past the end of the file");
     }
-    std::uint64_t pos = std::uint64_t(std::ftell(f_.get()));
+    const long tell = std::ftell(f_.get());
+    if (tell < 0) io_error(where + "cannot tell the read position");
+    std::uint64_t pos = std::uint64_t(tell);
     if (encoding_ == Encoding::Raw) {
         if (byte_skip_ == -1) {
-            if (file_size_ < pos + need) bad("sizes claim " + std::to_string(need) + " bytes of data, but the file holds only " +
-                                             std::to_string(file_size_ > pos ? file_size_ - pos : 0));
+            if (file_size_ < pos + need)
+                bad(where + "sizes claim " + std::to_string(need) + " bytes of data, but the file holds only " +
+                    std::to_string(file_size_ > pos ? file_size_ - pos : 0));
             pos = file_size_ - need;
         } else {
             pos += std::uint64_t(byte_skip_);
         }
         if (file_size_ < pos || file_size_ - pos < need)
-            bad("sizes " + std::to_string(nx) + " " + std::to_string(ny) + " " + std::to_string(nz) + " claim " +
-                std::to_string(need) + " bytes of data, but the file holds only " +
+            bad(where + "sizes " + std::to_string(sizes_[0]) + " " + std::to_string(sizes_[1]) + " " +
+                std::to_string(sizes_[2]) + " claim " + std::to_string(need) + " bytes of data, but the file holds only " +
                 std::to_string(file_size_ > pos ? file_size_ - pos : 0) + " (truncated?)");
-        if (std::fseek(f_.get(), long(pos), SEEK_SET) != 0) throw IoError("read_nrrd: " + path_ + ": cannot seek");
+        if (std::fseek(f_.get(), long(pos), SEEK_SET) != 0) io_error(where + "cannot seek");
     } else if (encoding_ == Encoding::Gzip) {
         const double avail = double(file_size_ - std::min(file_size_, pos));
-        if (double(need) > avail * kMaxDeflateRatio + 1024)
-            bad("sizes claim " + std::to_string(need) + " bytes of data, more than " + std::to_string(std::uint64_t(avail)) +
-                " bytes of gzip data can hold (truncated?)");
+        if (double(need) + double(std::max<std::int64_t>(byte_skip_, 0)) > avail * kMaxDeflateRatio + 1024)
+            bad(where + "sizes claim " + std::to_string(need) + " bytes of data, more than " +
+                std::to_string(std::uint64_t(avail)) + " bytes of gzip data can hold (truncated?)");
         if (byte_skip_ > 0) {
             std::vector<char> skip(std::size_t(std::min<std::int64_t>(byte_skip_, 1 << 20)));
             for (std::int64_t left = byte_skip_; left > 0;) {
@@ -517,14 +540,85 @@ Volume NrrdReader::read() {
     } else {
         // ascii: at least one character and one separator per sample.
         if (double(count) > double(file_size_ - std::min(file_size_, pos)))
-            bad("sizes claim " + std::to_string(count) + " ascii samples, more than the file can hold (truncated?)");
+            bad(where + "sizes claim " + std::to_string(count) + " ascii samples, more than the file can hold (truncated?)");
         if (byte_skip_ > 0 && std::fseek(f_.get(), long(pos + std::uint64_t(byte_skip_)), SEEK_SET) != 0)
-            throw IoError("read_nrrd: " + path_ + ": cannot seek");
+            io_error(where + "cannot seek");
+    }
+}
+
+Volume NrrdReader::read_volume(const VolumeReadOptions& opt) {
+    if (!(opt.half_width >= 0) || !std::isfinite(opt.half_width))
+        bad("half_width " + std::to_string(opt.half_width) + " is out of range (expected > 0 voxels, or 0 for the default)");
+    if (!std::isfinite(opt.iso)) bad("iso value is not finite");
+    parse_header();
+    const NrrdGeometry geo = geometry();
+
+    // The grid: isotropic voxels, axis-aligned with positive steps (origin = the file's origin,
+    // identity placement), or rotated/flipped orthogonal axes (origin 0, the file's frame in the placement).
+    Grid g;
+    for (int a = 0; a < 3; ++a) g.dims[std::size_t(a)] = int(sizes_[std::size_t(a)]);
+    g.origin = geo.origin;
+    if (geo.from == NrrdGeometry::From::Spacings) {
+        for (int a = 0; a < 3; ++a)
+            if (!(geo.axes[std::size_t(a)][a] > 0)) bad("spacings: axis " + std::to_string(a) + " is not positive");
+        const double h = geo.axes[0].x;
+        if (std::abs(geo.axes[1].y - h) > 1e-5 * h || std::abs(geo.axes[2].z - h) > 1e-5 * h)
+            bad("anisotropic spacings (" + geo.text + "); isotropic voxels are required");
+        g.voxel_size = h;
+    } else if (geo.from == NrrdGeometry::From::Directions) {
+        double len[3];
+        for (int a = 0; a < 3; ++a) len[a] = norm(geo.axes[std::size_t(a)]);
+        const double h = len[0];
+        if (std::abs(len[1] - h) > 1e-5 * h || std::abs(len[2] - h) > 1e-5 * h)
+            bad("anisotropic spacing (" + geo.text + "); isotropic voxels are required");
+        g.voxel_size = h;
+        bool aligned = true;
+        for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b)
+                aligned = aligned && (a == b ? geo.axes[std::size_t(a)][b] > 0 : geo.axes[std::size_t(a)][b] == 0.0);
+        if (!aligned) {
+            Vec3d u[3];
+            for (int a = 0; a < 3; ++a) u[a] = geo.axes[std::size_t(a)] / len[a];
+            for (int a = 0; a < 3; ++a)
+                for (int b = a + 1; b < 3; ++b)
+                    if (std::abs(dot(u[a], u[b])) > 1e-5)
+                        bad("space directions are not orthogonal (" + geo.text +
+                            "); a volume needs orthogonal axes of equal length");
+            // Orthonormal to rounding: Gram-Schmidt, the third axis keeping the file's handedness.
+            Placement& pl = g.placement;
+            pl.rotation[0] = u[0];
+            pl.rotation[1] = normalized(u[1] - u[0] * dot(u[0], u[1]));
+            pl.rotation[2] = cross(pl.rotation[0], pl.rotation[1]);
+            if (dot(pl.rotation[2], u[2]) < 0) pl.rotation[2] = -pl.rotation[2];
+            pl.translation = geo.origin;
+            g.origin = Vec3d{};
+        }
     }
 
+    // Half width and background: positive, and checked against the float range (a finite double such
+    // as 2e128 would become +Inf as a float).
+    auto positive_float = [&](const char* key) {
+        const auto v = parse_numbers(keys_.at(key), 1, key);
+        if (!(v[0] > 0) || !(v[0] <= std::numeric_limits<float>::max()))
+            bad(std::string(key) + " must be > 0 and fit in a float");
+        return float(v[0]);
+    };
+    float half_width = opt.half_width;
+    if (half_width == 0) {
+        half_width = 3.f;
+        if (keys_.count("normalflow_half_width")) half_width = positive_float("normalflow_half_width");
+    }
+    Volume vol(g, half_width);
+    if (keys_.count("normalflow_background")) vol.background = positive_float("normalflow_background");
+    const double band = double(half_width) * g.voxel_size;
+
+    // Position at the data and check that the file can hold what the sizes claim, before allocating.
+    open_data();
+
     // Stream 8 z-slices at a time and convert each slab of blocks.
-    const double sgn = opt_.negate ? -1.0 : 1.0;
-    const double iso = opt_.iso;
+    const std::uint64_t nx = std::uint64_t(sizes_[0]), ny = std::uint64_t(sizes_[1]);
+    const double sgn = opt.negate ? -1.0 : 1.0;
+    const double iso = opt.iso;
     std::vector<double> slab;
     const std::size_t slice = std::size_t(nx * ny);
     for (int bk = 0; bk < vol.block_dims[2]; ++bk) {
@@ -537,17 +631,17 @@ Volume NrrdReader::read() {
             const int y0 = bj * kBlockDim, yn = std::min<int>(kBlockDim, g.dims[1] - y0);
             for (int bi = 0; bi < vol.block_dims[0]; ++bi) {
                 const int x0 = bi * kBlockDim, xn = std::min<int>(kBlockDim, g.dims[0] - x0);
-                bool near = false, neg = false, pos_ = false;
+                bool near = false, neg = false, pos = false;
                 for (int lk = 0; lk < zn && !near; ++lk)
                     for (int lj = 0; lj < yn && !near; ++lj) {
                         const double* row = slab.data() + std::size_t(lk) * slice + std::size_t(y0 + lj) * nx + x0;
                         for (int li = 0; li < xn; ++li) {
                             const double x = row[li];
                             if (std::abs(x) < band) { near = true; break; }
-                            (x < 0 ? neg : pos_) = true;
+                            (x < 0 ? neg : pos) = true;
                         }
                     }
-                if (near || (neg && pos_)) {
+                if (near || (neg && pos)) {
                     const std::int32_t b = vol.allocate_block(bi, bj, bk);
                     float* dst = vol.block_values(b);
                     for (int lk = 0; lk < zn; ++lk)
@@ -561,8 +655,34 @@ Volume NrrdReader::read() {
             }
         }
     }
-    vol.check("read_nrrd: " + path_);
+    vol.check(who_ + ": " + path_);
     return vol;
+}
+
+ScalarImage NrrdReader::read_image() {
+    parse_header();
+    const NrrdGeometry geo = geometry();
+    ScalarImage img;
+    for (int a = 0; a < 3; ++a) img.dims[std::size_t(a)] = int(sizes_[std::size_t(a)]);
+    img.axes = geo.axes;
+    img.origin = geo.origin;
+    open_data();  // checks the sizes against the data before anything is allocated
+    const std::uint64_t count = sample_count();
+    try {
+        // Raw and ascii data hold what the sizes claim (checked); gzip data may end early: grow with it.
+        img.values.reserve(std::size_t(encoding_ == Encoding::Gzip ? std::min<std::uint64_t>(count, 1u << 24) : count));
+        std::vector<double> chunk;
+        for (std::uint64_t done = 0; done < count;) {
+            const std::size_t n = std::size_t(std::min<std::uint64_t>(count - done, 1u << 17));
+            chunk.resize(n);
+            read_samples(chunk.data(), n);  // finite as floats (checked)
+            for (const double x : chunk) img.values.push_back(float(x));
+            done += n;
+        }
+    } catch (const std::bad_alloc&) {
+        throw OutOfMemory(who_ + ": " + path_ + ": " + std::to_string(count) + " samples do not fit in memory");
+    }
+    return img;
 }
 
 std::string num(double x) {
@@ -573,24 +693,43 @@ std::string num(double x) {
 
 }  // namespace
 
-Volume read_nrrd(const std::string& path, const VolumeReadOptions& opt) { return NrrdReader(path, opt).read(); }
+Volume read_nrrd(const std::string& path, const VolumeReadOptions& opt) {
+    return NrrdReader(path, "read_nrrd").read_volume(opt);
+}
 
 Volume read_nrrd(const std::string& path) { return read_nrrd(path, VolumeReadOptions{}); }
+
+ScalarImage read_nrrd_image(const std::string& path) { return NrrdReader(path, "read_nrrd_image").read_image(); }
 
 void write_nrrd(const std::string& path, const Volume& v) {
     v.check("write_nrrd: " + path);
     const Grid& g = v.grid;
-    const std::string h = num(g.voxel_size);
+    const Placement& pl = g.placement;
+    // The file's frame is the world: directions h · rotation columns, origin the world position of
+    // sample (0, 0, 0). With the identity placement these are (h,0,0) (0,h,0) (0,0,h) and grid.origin.
+    std::string dirs, origin;
+    if (pl.is_identity()) {
+        const std::string h = num(g.voxel_size);
+        dirs = "(" + h + ",0,0) (0," + h + ",0) (0,0," + h + ")";
+        origin = "(" + num(g.origin.x) + "," + num(g.origin.y) + "," + num(g.origin.z) + ")";
+    } else {
+        for (int a = 0; a < 3; ++a) {
+            const Vec3d d = pl.rotation[std::size_t(a)] * g.voxel_size;
+            dirs += std::string(a ? " " : "") + "(" + num(d.x) + "," + num(d.y) + "," + num(d.z) + ")";
+        }
+        const Vec3d o = pl.point(g.origin);
+        origin = "(" + num(o.x) + "," + num(o.y) + "," + num(o.z) + ")";
+    }
     std::string hdr = "NRRD0004\n# Complete NRRD file format specification at:\n"
                       "# http://teem.sourceforge.net/nrrd/format.html\n"
                       "# written by normalflow: signed distance, world units, negative inside\n"
                       "type: float\ndimension: 3\nspace dimension: 3\n";
     hdr += "sizes: " + std::to_string(g.dims[0]) + " " + std::to_string(g.dims[1]) + " " + std::to_string(g.dims[2]) + "\n";
-    hdr += "space directions: (" + h + ",0,0) (0," + h + ",0) (0,0," + h + ")\n";
+    hdr += "space directions: " + dirs + "\n";
     hdr += "kinds: domain domain domain\ncenterings: node node node\n";
     hdr += std::string("endian: ") + (std::endian::native == std::endian::little ? "little" : "big") + "\n";
     hdr += "encoding: raw\n";
-    hdr += "space origin: (" + num(g.origin.x) + "," + num(g.origin.y) + "," + num(g.origin.z) + ")\n";
+    hdr += "space origin: " + origin + "\n";
     hdr += "normalflow_half_width:=" + num(v.half_width) + "\n";
     hdr += "normalflow_background:=" + num(v.background) + "\n\n";
 

@@ -77,26 +77,59 @@ openvdb::FloatGrid::Ptr read_first_float_grid(const std::string& path, const std
     }
 }
 
-/// Checks that xf is linear, axis-aligned, with a uniform positive scale; returns the scale h.
-double check_transform(const openvdb::math::Transform& xf, const std::string& who) {
+/// The frame of a linear transform with a uniform scale h: the world directions of its index axes.
+struct Frame {
+    double h = 0;
+    std::array<Vec3d, 3> rotation{};  ///< unit columns
+    Vec3d origin;                     ///< world position of index (0, 0, 0)
+};
+
+/// Checks that xf is linear with a uniform positive scale and orthogonal axes (any rotation or reflection);
+/// returns its frame.
+Frame check_transform(const openvdb::math::Transform& xf, const std::string& who) {
     if (!xf.isLinear()) throw InvalidInput(who + ": grid transform is not linear");
     const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
-    const double h = (xf.indexToWorld(openvdb::Vec3d(1, 0, 0)) - o)[0];
-    if (!(h > 0) || !std::isfinite(h)) throw InvalidInput(who + ": grid transform has a non-positive scale");
+    if (!is_finite(Vec3d{o[0], o[1], o[2]})) throw InvalidInput(who + ": grid transform has a non-finite origin");
+    Frame f;
+    f.origin = {o[0], o[1], o[2]};
+    std::array<Vec3d, 3> d{};
     for (int a = 0; a < 3; ++a) {
         openvdb::Vec3d e(0, 0, 0);
         e[a] = 1;
-        const openvdb::Vec3d d = xf.indexToWorld(e) - o;
-        for (int b = 0; b < 3; ++b) {
-            const double want = a == b ? h : 0.0;
-            if (std::abs(d[b] - want) > 1e-6 * h)
-                throw InvalidInput(who + ": grid transform is not an axis-aligned uniform scale (voxel " +
-                                   std::to_string(a) + " axis maps to (" + std::to_string(d[0]) + ", " +
-                                   std::to_string(d[1]) + ", " + std::to_string(d[2]) + "))");
-        }
+        const openvdb::Vec3d w = xf.indexToWorld(e) - o;
+        d[a] = {w[0], w[1], w[2]};
     }
-    if (!is_finite(Vec3d{o[0], o[1], o[2]})) throw InvalidInput(who + ": grid transform has a non-finite origin");
-    return h;
+    f.h = norm(d[0]);
+    if (!(f.h > 0) || !std::isfinite(f.h)) throw InvalidInput(who + ": grid transform has a non-positive scale");
+    for (int a = 0; a < 3; ++a) {
+        if (!is_finite(d[a]) || std::abs(norm(d[a]) - f.h) > 1e-6 * f.h)
+            throw InvalidInput(who + ": grid transform is not a uniform scale (voxel axis " + std::to_string(a) +
+                               " has length " + std::to_string(norm(d[a])) + ", axis 0 " + std::to_string(f.h) + ")");
+        for (int b = 0; b < a; ++b)
+            if (std::abs(dot(d[a], d[b])) > 1e-6 * f.h * f.h)
+                throw InvalidInput(who + ": grid transform is sheared (voxel axes " + std::to_string(b) + " and " +
+                                   std::to_string(a) + " are not orthogonal)");
+        f.rotation[a] = d[a] / f.h;
+    }
+    return f;
+}
+
+/// A linear transform: index (i, j, k) to origin + h · (i R0 + j R1 + k R2).
+openvdb::math::Transform::Ptr make_transform(double h, const std::array<Vec3d, 3>& rotation, const Vec3d& origin) {
+    openvdb::math::Mat4d m = openvdb::math::Mat4d::identity();  // row vectors: world = index · m
+    for (int a = 0; a < 3; ++a) {
+        m(a, 0) = h * rotation[a].x;
+        m(a, 1) = h * rotation[a].y;
+        m(a, 2) = h * rotation[a].z;
+    }
+    m(3, 0) = origin.x;
+    m(3, 1) = origin.y;
+    m(3, 2) = origin.z;
+    return openvdb::math::Transform::createLinearTransform(m);
+}
+
+bool axis_aligned(const std::array<Vec3d, 3>& r) {
+    return norm(r[0] - Vec3d{1, 0, 0}) < 1e-9 && norm(r[1] - Vec3d{0, 1, 0}) < 1e-9 && norm(r[2] - Vec3d{0, 0, 1}) < 1e-9;
 }
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -203,12 +236,11 @@ openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::s
                                std::to_string(cap >> 20) + " MiB, far more than a file of this size can hold)");
         }
         const openvdb::FloatGrid::Ptr& grid = *keep;
-        const openvdb::math::Transform& xf = grid->transform();
-        const double h = check_transform(xf, who);
-        const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
+        const Frame frame = check_transform(grid->transform(), who);
         ByteWriter w;
-        w.put(h);
-        w.put(Vec3d{o[0], o[1], o[2]});
+        w.put(frame.h);
+        w.put(frame.origin);
+        w.put(frame.rotation);
         w.put(std::int32_t(grid->getGridClass()));
         const float background = grid->background();
         w.put(background);
@@ -248,6 +280,7 @@ openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::s
     ByteReader r(bytes, who);
     const auto h = r.get<double>();
     const auto o = r.get<Vec3d>();
+    const auto rotation = r.get<std::array<Vec3d, 3>>();
     const auto cls = r.get<std::int32_t>();
     const auto background = r.get<float>();
     const auto dims = r.get<std::array<std::int32_t, 3>>();
@@ -260,9 +293,7 @@ openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::s
         throw IoError(who + ": the isolated process sent inconsistent leaf data");
 
     openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(background);
-    openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(h);
-    xf->postTranslate(openvdb::Vec3d(o[0], o[1], o[2]));
-    grid->setTransform(xf);
+    grid->setTransform(make_transform(h, rotation, o));
     grid->setGridClass(cls >= 0 && cls < openvdb::NUM_GRID_CLASSES ? openvdb::GridClass(cls) : openvdb::GRID_UNKNOWN);
     if (dims[0] != 0 || dims[1] != 0 || dims[2] != 0)
         grid->insertMeta(kDimsKey, openvdb::Vec3IMetadata(openvdb::Vec3i(dims[0], dims[1], dims[2])));
@@ -292,7 +323,8 @@ Volume read_vdb(const std::string& path) {
     openvdb::FloatGrid::Ptr grid = read_grid_isolated(path, who);
     // A copy: the fog branch below replaces grid. Checked in the child: linear, uniform scale h.
     const openvdb::math::Transform xf = grid->transform();
-    const double h = xf.voxelSize()[0];
+    const Frame frame = check_transform(xf, who);
+    const double h = frame.h;
 
     try {
         if (grid->getGridClass() == openvdb::GRID_FOG_VOLUME) {
@@ -338,8 +370,15 @@ Volume read_vdb(const std::string& path) {
     }
     if (blocks > (std::uint64_t(1) << 31))
         throw InvalidInput(who + ": grid extent of " + std::to_string(blocks) + " blocks is too large");
-    const openvdb::Vec3d wo = xf.indexToWorld(bb.min());
-    g.origin = {wo[0], wo[1], wo[2]};
+    if (axis_aligned(frame.rotation)) {
+        const openvdb::Vec3d wo = xf.indexToWorld(bb.min());
+        g.origin = {wo[0], wo[1], wo[2]};
+    } else {
+        // the grid's frame: index (0, 0, 0) at its origin, the transform's axes as the placement
+        g.origin = Vec3d{double(bb.min()[0]), double(bb.min()[1]), double(bb.min()[2])} * h;
+        g.placement.rotation = frame.rotation;
+        g.placement.translation = frame.origin;
+    }
     g.voxel_size = h;
 
     Volume vol(g, float(background / h));
@@ -387,9 +426,13 @@ void write_vdb(const std::string& path, const Volume& v) {
     v.check(who);
 
     openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(v.background);
-    openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(g.voxel_size);
-    xf->postTranslate(openvdb::Vec3d(g.origin.x, g.origin.y, g.origin.z));
-    grid->setTransform(xf);
+    if (g.placement.is_identity()) {
+        openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(g.voxel_size);
+        xf->postTranslate(openvdb::Vec3d(g.origin.x, g.origin.y, g.origin.z));
+        grid->setTransform(xf);
+    } else {
+        grid->setTransform(make_transform(g.voxel_size, g.placement.rotation, g.placement.point(g.origin)));
+    }
     grid->setGridClass(openvdb::GRID_LEVEL_SET);
     grid->setName("surface");
     grid->insertMeta(kDimsKey, openvdb::Vec3IMetadata(openvdb::Vec3i(g.dims[0], g.dims[1], g.dims[2])));

@@ -17,10 +17,13 @@ namespace normalflow {
 /// 0.5 iso-surface with a half width of 3 voxels (openvdb::tools::levelSetRebuild).
 /// The grid extent is the normalflow_dims metadata written by write_vdb, else the bounding box of
 /// all leaves and active values, with its minimum rounded down to a multiple of 8 (so leaves map
-/// onto blocks). The transform must be linear, axis-aligned, with a uniform positive scale h.
+/// onto blocks). The transform must be linear with a uniform positive scale h and orthogonal axes: an
+/// axis-aligned one gives the grid's origin in world units; a rotated or reflected one gives the grid's
+/// frame (origin = h × the extent's first index) and its Placement (the axes' directions, the world
+/// position of index (0, 0, 0)).
 ///
 /// \throw IoError if the file cannot be opened; InvalidInput naming the file for: not a VDB file,
-///        truncated or corrupt data, no float grid, an empty grid, a non-uniform / rotated /
+///        truncated or corrupt data, no float grid, an empty grid, a non-uniform / sheared /
 ///        non-linear transform, a non-positive background, NaN/Inf values, or an extent too large;
 ///        IoError if OpenVDB crashes on the file. The file is read by OpenVDB in a forked child
 ///        (io/util/isolate.h) that sends back the grid's tiles and leaves; this process rebuilds it.
@@ -30,7 +33,8 @@ Volume read_vdb(const std::string& path);
 
 /// Writes v as a .vdb file holding one FloatGrid named "surface", class GRID_LEVEL_SET, background
 /// v.background, a linear transform with voxel size h and translation v.grid.origin (so index
-/// (i, j, k) is our sample (i, j, k)), metadata normalflow_dims and normalflow_half_width.
+/// (i, j, k) is our sample (i, j, k)) — rotated and translated by v.grid.placement when it is not the
+/// identity, so the grid lies where its file of origin said, metadata normalflow_dims and normalflow_half_width.
 /// Stored blocks become leaves (values with |phi| < background active), inside tiles become
 /// inactive -background tiles; the tree is then pruned. Written atomically (temporary file + rename).
 /// \throw InvalidInput (Volume::check) if v breaks its invariants (empty grid, non-positive voxel

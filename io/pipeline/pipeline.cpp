@@ -229,6 +229,7 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
         r.seconds.decimate = clock.lap();
     }
     set_volume_normals(m, v);  // the processed surface's own normals: viewers shade it smooth
+    place_mesh(m, v.grid.placement);
     r.seconds.total += r.seconds.extract + r.seconds.decimate;
     r.peak_memory_bytes = peak_memory_bytes();
     return m;
@@ -436,21 +437,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     PipelineReport& r = result.report;
     Volume v = mesh_to_volume(m, o, &r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
-    if (o.smoothing) {
-        Stopwatch clock;
-        SmoothOptions so = o.smooth;
-        if (so.length_scale == 0) {
-            r.length_scale = o.length_scale > 0 ? o.length_scale : model_length_scale(m);
-            so.length_scale = float(r.length_scale / v.grid.voxel_size);
-        } else {
-            r.length_scale = double(so.length_scale) * v.grid.voxel_size;
-        }
-        r.smooth = smooth_volume(v, so, progress, o.fit_to_normal_map ? &normal_map : nullptr);
-        r.smoothed = true;
-        append(r.warnings, r.smooth.warnings);
-        r.seconds.smooth = clock.lap();
-        r.seconds.total += r.seconds.smooth;
-    }
+    if (o.smoothing)
+        smooth_volume_stage(v, o, model_length_scale(m), &r, progress, o.fit_to_normal_map ? &normal_map : nullptr);
     const bool open = has_open_boundary(m);
     const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && o.max_error == 0 && !o.closed;
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
@@ -503,6 +491,57 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     r.seconds.total += seconds;
     r.peak_memory_bytes = peak_memory_bytes();
     return result;
+}
+
+void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_length_scale, PipelineReport* report,
+                         Progress* progress, NormalMap* normal_map) {
+    PipelineReport local;
+    PipelineReport& r = report ? *report : local;
+    Stopwatch clock;
+    SmoothOptions so = o.smooth;
+    if (so.length_scale == 0) {
+        r.length_scale = o.length_scale > 0 ? o.length_scale : default_length_scale;
+        so.length_scale = float(r.length_scale / v.grid.voxel_size);
+    } else {
+        r.length_scale = double(so.length_scale) * v.grid.voxel_size;
+    }
+    r.smooth = smooth_volume(v, so, progress, normal_map);
+    r.smoothed = true;
+    append(r.warnings, r.smooth.warnings);
+    r.seconds.smooth = clock.lap();
+    r.seconds.total += r.seconds.smooth;
+}
+
+PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress* progress, bool want_mesh) {
+    validate(o);
+    if (o.connectivity == Connectivity::Keep)
+        throw InvalidInput("connectivity keep: a volume has no input mesh to keep; its surface is extracted");
+    if (o.closed) throw InvalidInput("closed: a volume's surface is extracted closed already");
+    if (o.scan.resolution != 0 || o.scan.shell_thickness != 0)
+        throw InvalidInput("scan conversion options (resolution, shell) do not apply to a volume input");
+    v.check("smooth_volume_input");
+    PipelineResult result;
+    PipelineReport& r = result.report;
+    r.repaired = false;
+    r.scan.grid = v.grid;
+    if (o.smoothing) smooth_volume_stage(v, o, kVolumeLengthScaleVoxels * v.grid.voxel_size, &r, progress);
+    if (want_mesh) result.mesh = volume_to_mesh(v, o, &r, progress);
+    r.peak_memory_bytes = peak_memory_bytes();
+    return result;
+}
+
+void place_mesh(Mesh& m, const Placement& p) {
+    if (p.is_identity()) return;
+    for (Vec3f& x : m.positions) {
+        const Vec3d w = p.point(Vec3d{x.x, x.y, x.z});
+        x = Vec3f{float(w.x), float(w.y), float(w.z)};
+    }
+    for (Vec3f& n : m.normals) {
+        const Vec3d d = p.direction(Vec3d{n.x, n.y, n.z});
+        n = Vec3f{float(d.x), float(d.y), float(d.z)};
+    }
+    if (p.reflects())
+        for (auto& t : m.triangles) std::swap(t[1], t[2]);
 }
 
 }  // namespace normalflow

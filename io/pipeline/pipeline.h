@@ -229,10 +229,36 @@ Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, Pipeli
 /// The second half of smooth_mesh: extraction and, with options.target_faces > 0 or options.max_error > 0,
 /// decimation (decimate_mesh by the tangent planes of v's normals at the vertices); the result has vertex
 /// normals from v (set_volume_normals). options.smoothing only selects the message
-/// when the volume holds no surface.
+/// when the volume holds no surface. The mesh is placed in the volume's world (place_mesh with
+/// v.grid.placement).
 /// \throw InvalidInput if the volume holds no surface.
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                     Progress* progress = nullptr);
+
+/// The model length unit smooth_volume_stage gives the engine for a volume that did not come from a mesh (a
+/// volume file), in voxels of its grid: the scale of a scan's noise and of a binary mask's staircase.
+/// Chosen on the ball mask and the white-matter MRI: benchmarks/README.md, "Volumes in and out".
+inline constexpr double kVolumeLengthScaleVoxels = 2.0;
+
+/// The smoothing stage of smooth_mesh on its own: smooth_volume on v with options.smooth, its length
+/// unit (when options.smooth.length_scale is 0) options.length_scale, else default_length_scale (world
+/// units). Fills report's length_scale, smoothed, smooth, seconds.smooth and warnings.
+void smooth_volume_stage(Volume& v, const PipelineOptions& options, double default_length_scale,
+                         PipelineReport* report = nullptr, Progress* progress = nullptr,
+                         NormalMap* normal_map = nullptr);
+
+/// smooth_mesh for a volume (a level set, or an image made into one, image_to_volume): smooths v in place
+/// (options.smoothing; the length unit kVolumeLengthScaleVoxels voxels unless options.length_scale) and
+/// extracts and decimates it (volume_to_mesh), unless want_mesh is false (the caller writes the volume).
+/// The mesh is in the volume's world (its grid's placement). Connectivity::Keep and options.closed have
+/// no input mesh to keep and are refused, as is a scan conversion option (scan.resolution, shell).
+/// 	hrow InvalidInput for bad options or a volume without a surface; as smooth_mesh otherwise.
+PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& options = {}, Progress* progress = nullptr,
+                                   bool want_mesh = true);
+
+/// Maps a mesh from a volume grid's frame to the world of its file (Placement): positions, normals, and the
+/// faces' orientation where the placement reflects (so they still face outwards). Nothing for the identity.
+void place_mesh(Mesh& m, const Placement& placement);
 
 /// What decimate_mesh does.
 struct DecimationOptions {

@@ -20,6 +20,15 @@ void Volume::check(std::string_view who) const {
     if (!(grid.voxel_size > 0.0) || !std::isfinite(grid.voxel_size))
         bad("voxel_size must be finite and > 0, got " + std::to_string(grid.voxel_size));
     if (!is_finite(grid.origin)) bad("origin is not finite");
+    {
+        const Placement& pl = grid.placement;
+        bool ok = is_finite(pl.translation);
+        for (int a = 0; a < 3 && ok; ++a)
+            for (int b = 0; b < 3 && ok; ++b)
+                ok = is_finite(pl.rotation[a]) &&
+                     std::abs(dot(pl.rotation[a], pl.rotation[b]) - (a == b ? 1.0 : 0.0)) <= 1e-6;
+        if (!ok) bad("placement is not a finite rotation (orthonormal columns) and translation");
+    }
     for (int a = 0; a < 3; ++a)
         if (grid.dims[a] < 1) bad("dims must be >= 1, got " + dims_text(grid.dims));
     if (!(background > 0.0f) || !std::isfinite(background))

@@ -21,11 +21,39 @@
 
 namespace normalflow {
 
+/// Where a grid's own frame lies in the world of the file it came from: world = translation +
+/// rotation · p, with p a position in the grid's frame (Grid::world) and rotation orthonormal (its
+/// columns the world directions of the grid's x, y, z axes; a reflection when its determinant is −1,
+/// as in many medical volumes). The identity for every volume made from a mesh. The engine works in
+/// the grid's frame; the file boundary (io/) maps results to the world with it.
+struct Placement {
+    std::array<Vec3d, 3> rotation{Vec3d{1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, 0, 1}};  ///< columns
+    Vec3d translation;
+
+    bool is_identity() const {
+        return translation == Vec3d{} && rotation[0] == Vec3d{1, 0, 0} && rotation[1] == Vec3d{0, 1, 0} &&
+               rotation[2] == Vec3d{0, 0, 1};
+    }
+    /// The world direction of a direction d of the grid's frame.
+    Vec3d direction(const Vec3d& d) const { return rotation[0] * d.x + rotation[1] * d.y + rotation[2] * d.z; }
+    /// The world position of a position p of the grid's frame.
+    Vec3d point(const Vec3d& p) const { return translation + direction(p); }
+    /// The grid-frame position of a world position w (the rotation's transpose).
+    Vec3d inverse_point(const Vec3d& w) const {
+        const Vec3d d = w - translation;
+        return {dot(rotation[0], d), dot(rotation[1], d), dot(rotation[2], d)};
+    }
+    /// Whether the rotation is a reflection (determinant < 0): a mesh mapped by it turns its faces over.
+    bool reflects() const { return dot(rotation[0], cross(rotation[1], rotation[2])) < 0; }
+};
+
 /// A regular grid of samples: sample (i, j, k) sits at origin + voxel_size * (i, j, k).
 struct Grid {
-    Vec3d origin;                   ///< world position of sample (0, 0, 0)
+    Vec3d origin;                   ///< world position of sample (0, 0, 0), in the grid's frame
     double voxel_size = 1.0;        ///< h, world units, > 0
     std::array<int, 3> dims{0, 0, 0};  ///< number of samples along x, y, z
+    /// The grid's frame in the world of its file (identity unless a volume file said otherwise).
+    Placement placement;
 
     /// World position of (possibly fractional) index (i, j, k).
     Vec3d world(const Vec3d& ijk) const { return origin + ijk * voxel_size; }
