@@ -134,6 +134,8 @@ bool is_volume_output_path(const std::string& path) {
     return ext == ".vdb" || ext == ".nrrd";
 }
 
+bool is_vdb_path(const std::string& path) { return lower_extension(path) == ".vdb"; }
+
 Volume read_volume(const std::string& path) { return read_volume(path, VolumeInput{}); }
 
 Volume read_volume(const std::string& path, const VolumeInput& in, VolumeReadInfo* info) {
@@ -210,12 +212,17 @@ Volume read_volume(const std::string& path, const VolumeInput& in, VolumeReadInf
     }
 }
 
-void write_volume(const std::string& path, const Volume& v) {
+void write_volume(const std::string& path, const Volume& v, const NormalMap* normals) {
     const std::string ext = lower_extension(path);
-    if (ext == ".nrrd") return write_nrrd(path, v);
+    if (ext == ".nrrd") {
+        if (normals)
+            throw InvalidInput("write_volume: " + path + ": the normal map is written as a vector grid of a .vdb file; "
+                               "use .vdb");
+        return write_nrrd(path, v);
+    }
     if (ext == ".vdb") {
 #if NORMALFLOW_HAS_OPENVDB
-        return write_vdb(path, v);
+        return write_vdb(path, v, normals);
 #else
         no_support("write_volume", path, "writing .vdb", "OpenVDB");
 #endif

@@ -44,6 +44,8 @@ void write_mesh(const std::string& path, const Mesh& m, const WriteOptions& opt 
 bool is_volume_path(const std::string& path);
 /// True for the volume files write_volume writes: .vdb and .nrrd.
 bool is_volume_output_path(const std::string& path);
+/// True for .vdb paths (case-insensitive).
+bool is_vdb_path(const std::string& path);
 
 /// Reads a signed distance volume from .nrrd or .vdb (the first float grid): read_volume with no VolumeInput.
 Volume read_volume(const std::string& path);
@@ -82,7 +84,8 @@ struct VolumeReadInfo {
 /// 	hrow InvalidInput naming the file (bad contents, contradicting options, no surface); IoError.
 Volume read_volume(const std::string& path, const VolumeInput& in, VolumeReadInfo* info = nullptr);
 
-/// Writes v as .nrrd (dense, band values and ±background elsewhere) or .vdb (sparse level set).
-void write_volume(const std::string& path, const Volume& v);
+/// Writes v as .nrrd (dense, band values and ±background elsewhere) or .vdb (sparse level set; with normals,
+/// also the filtered normal map as a vector grid, write_vdb). A normal map needs .vdb.
+void write_volume(const std::string& path, const Volume& v, const NormalMap* normals = nullptr);
 
 }  // namespace normalflow

@@ -1,6 +1,7 @@
 // normalflow voxelize / extract / smooth: the pipeline read → repair → scan_convert → smooth → extract →
 // write. The stages between read and write are the library's smooth_mesh (io/pipeline/pipeline.h);
 // the flags parse straight into its PipelineOptions, so every default is the library's.
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -34,6 +35,7 @@ struct SmoothArgs {
     std::string input, output;
     PipelineOptions pipeline;
     VolumeInput volume;                ///< how a dense volume file's values are read (a volume input)
+    bool normal_map = false;           ///< a .vdb output also holds the filtered normal map
     DracoOptions draco;                ///< quantization and level for .drc / .glb outputs
     OutputFlags out;
 };
@@ -103,10 +105,11 @@ Json volume_input_json(const std::string& file, const VolumeReadInfo& info, cons
 }
 
 /// Writes a volume, timed into j["seconds"]["write"], and j["output"].
-void write_volume_result(const std::string& output, const Volume& v, TerminalProgress& progress, Json& j) {
+void write_volume_result(const std::string& output, const Volume& v, TerminalProgress& progress, Json& j,
+                         const NormalMap* normals = nullptr) {
     Stopwatch clock;
     progress.begin("write");
-    write_volume(output, v);
+    write_volume(output, v, normals && !(*normals)[0].values.empty() ? normals : nullptr);
     j.set("output", Json::object().set("file", output).set("blocks", v.block_count()));
     j["seconds"].set("write", clock.seconds());
 }
@@ -237,9 +240,15 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     Stopwatch clock;
     VolumeReadInfo info;
     Volume v = read_volume(a.input, vin, &info);
+    NormalMap normals;
     const double t_read = clock.lap();
+    // The length unit: kVolumeLengthScaleVoxels of the file's coarsest spacing, the scale of its staircase
+    // (smooth_volume_input's default, the grid's voxels, is the same for isotropic files).
+    if (opt.length_scale == 0 && opt.smooth.length_scale == 0)
+        opt.length_scale = kVolumeLengthScaleVoxels * std::max({info.spacing[0], info.spacing[1], info.spacing[2]});
     const PipelineResult result =
-        naming(a.input, [&] { return smooth_volume_input(v, opt, &progress, /*want_mesh=*/!volume_out); });
+        naming(a.input, [&] { return smooth_volume_input(v, opt, &progress, /*want_mesh=*/!volume_out,
+                                                         a.normal_map ? &normals : nullptr); });
     const PipelineReport& r = result.report;
     Json j = Json::object();
     j.set("command", "smooth").set("mode", to_string(opt.smooth.mode)).set("input", volume_input_json(a.input, info, v));
@@ -251,7 +260,7 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     if (!volume_out) sec.set("extract", r.seconds.extract).set("decimate", r.seconds.decimate);
     j.set("seconds", sec).set("warnings", Json::array(r.warnings));
     if (volume_out) {
-        write_volume_result(a.output, v, progress, j);
+        write_volume_result(a.output, v, progress, j, a.normal_map ? &normals : nullptr);
     } else {
         write_result(a.output, result.mesh, progress, j, a.draco);
     }
@@ -275,6 +284,8 @@ int run_smooth(const SmoothArgs& a) {
     if (!volume_out && mesh_format_from_path(a.output) == MeshFormat::Unknown)
         throw InvalidInput("smooth: " + a.output +
                            ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc; .vdb or .nrrd for the volume)");
+    if (a.normal_map && !is_vdb_path(a.output))
+        throw InvalidInput("smooth: " + a.output + ": --normal-map is written into a .vdb output");
     if (is_volume_path(a.input)) return run_smooth_volume(a, opt, volume_out, total, progress);
     if (a.volume.iso || a.volume.label || a.volume.negate)
         throw InvalidInput("smooth: " + a.input + ": --iso, --label and --negate apply to a volume input");
@@ -286,11 +297,14 @@ int run_smooth(const SmoothArgs& a) {
     if (volume_out) {
         // the smoothed volume itself: scan conversion and the engine, no extraction
         PipelineReport r;
+        NormalMap normals;
         Volume v = naming(a.input, [&] { return mesh_to_volume(mesh, opt, &r, &progress); });
-        naming(a.input, [&] { smooth_volume_stage(v, opt, model_length_scale(mesh), &r, &progress); });
+        naming(a.input, [&] {
+            smooth_volume_stage(v, opt, model_length_scale(mesh), &r, &progress, a.normal_map ? &normals : nullptr);
+        });
         Json j = report_json("smooth", r, t_read, &info);
         j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
-        write_volume_result(a.output, v, progress, j);
+        write_volume_result(a.output, v, progress, j, &normals);
         finish(j, a.out, total, progress);
         progress.note("smooth: " + a.output + " (the smoothed volume, " + std::to_string(v.block_count()) + " blocks)");
         return 0;
@@ -438,6 +452,8 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("--boundary-rings", a->pipeline.fit.boundary_rings,
                     "keep: an open boundary stays, and the vertices within this many edge rings of it move partly")
         ->check(CLI::Range(0, 100000))->capture_default_str();
+    cmd->add_flag("--normal-map", a->normal_map,
+                  "with a .vdb output: also write the filtered normal map, a vector grid \"normals\"");
     add_decimation_options(cmd, a->pipeline);
     add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);

@@ -419,11 +419,17 @@ Volume read_vdb(const std::string& path) {
     return vol;
 }
 
-void write_vdb(const std::string& path, const Volume& v) {
+void write_vdb(const std::string& path, const Volume& v, const NormalMap* normals) {
     init_openvdb();
     const std::string who = "write_vdb: " + path;
     const Grid& g = v.grid;
     v.check(who);
+    if (normals)
+        for (const Volume& c : *normals) {
+            c.check(who + ": normal map");
+            if (c.grid.dims != g.dims || c.grid.voxel_size != g.voxel_size || !(c.grid.origin == g.origin))
+                throw InvalidInput(who + ": the normal map is not on the volume's grid");
+        }
 
     openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(v.background);
     if (g.placement.is_identity()) {
@@ -458,11 +464,35 @@ void write_vdb(const std::string& path, const Volume& v) {
                 if (v.block_table[v.table_index(bi, bj, bk)] == kBlockInside)
                     tree.addTile(1, openvdb::Coord(bi * kBlockDim, bj * kBlockDim, bk * kBlockDim), -v.background, false);
     openvdb::tools::prune(tree);
+    openvdb::GridPtrVec grids{grid};
+    if (normals) {
+        // The filtered normal map: unit vectors in world space where the engine defined them, active there.
+        openvdb::Vec3SGrid::Ptr ng = openvdb::Vec3SGrid::create(openvdb::Vec3f(0, 0, 0));
+        ng->setTransform(grid->transform().copy());
+        ng->setName("normals");
+        ng->setVectorType(openvdb::VEC_COVARIANT_NORMALIZE);
+        ng->setIsInWorldSpace(true);
+        auto acc = ng->getAccessor();
+        const Volume& nx = (*normals)[0];
+        for (std::size_t b = 0; b < nx.block_count(); ++b) {
+            const auto& bc = nx.block_coords[b];
+            for (int lk = 0; lk < kBlockDim; ++lk)
+                for (int lj = 0; lj < kBlockDim; ++lj)
+                    for (int li = 0; li < kBlockDim; ++li) {
+                        const int i = bc[0] * kBlockDim + li, j = bc[1] * kBlockDim + lj, k = bc[2] * kBlockDim + lk;
+                        const Vec3d n{nx.value(i, j, k), (*normals)[1].value(i, j, k), (*normals)[2].value(i, j, k)};
+                        if (n.x == kNoNormal || n.y == kNoNormal || n.z == kNoNormal || !g.contains(i, j, k)) continue;
+                        const Vec3d w = g.placement.direction(n);
+                        acc.setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3f(float(w.x), float(w.y), float(w.z)));
+                    }
+        }
+        grids.push_back(ng);
+    }
 
     AtomicFile out(path, "write_vdb");
     try {
         openvdb::io::File file(out.temp_path());
-        file.write(openvdb::GridPtrVec{grid});
+        file.write(grids);
         file.close();
     } catch (const std::exception& e) {
         throw IoError(who + ": write failed (" + e.what() + ")");

@@ -40,6 +40,9 @@ Volume read_vdb(const std::string& path);
 /// \throw InvalidInput (Volume::check) if v breaks its invariants (empty grid, non-positive voxel
 ///        size or background, inconsistent blocks, ...); NumericalError for a NaN/Inf sample; IoError
 ///        if the file cannot be written.
-void write_vdb(const std::string& path, const Volume& v);
+/// With normals (the engine's filtered normal map, smooth_volume's normal_map, on v's grid), a second grid
+/// "normals": a Vec3SGrid of unit vectors in world space (covariant, normalised), active where the map is
+/// defined.
+void write_vdb(const std::string& path, const Volume& v, const NormalMap* normals = nullptr);
 
 }  // namespace normalflow

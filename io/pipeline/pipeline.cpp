@@ -512,7 +512,8 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_len
     r.seconds.total += r.seconds.smooth;
 }
 
-PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress* progress, bool want_mesh) {
+PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress* progress, bool want_mesh,
+                                   NormalMap* normal_map) {
     validate(o);
     if (o.connectivity == Connectivity::Keep)
         throw InvalidInput("connectivity keep: a volume has no input mesh to keep; its surface is extracted");
@@ -524,7 +525,7 @@ PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress
     PipelineReport& r = result.report;
     r.repaired = false;
     r.scan.grid = v.grid;
-    if (o.smoothing) smooth_volume_stage(v, o, kVolumeLengthScaleVoxels * v.grid.voxel_size, &r, progress);
+    if (o.smoothing) smooth_volume_stage(v, o, kVolumeLengthScaleVoxels * v.grid.voxel_size, &r, progress, normal_map);
     if (want_mesh) result.mesh = volume_to_mesh(v, o, &r, progress);
     r.peak_memory_bytes = peak_memory_bytes();
     return result;

@@ -235,10 +235,12 @@ Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, Pipeli
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                     Progress* progress = nullptr);
 
-/// The model length unit smooth_volume_stage gives the engine for a volume that did not come from a mesh (a
-/// volume file), in voxels of its grid: the scale of a scan's noise and of a binary mask's staircase.
-/// Chosen on the ball mask and the white-matter MRI: benchmarks/README.md, "Volumes in and out".
-inline constexpr double kVolumeLengthScaleVoxels = 2.0;
+/// The model length unit smooth_volume_input gives the engine for a volume that did not come from a mesh (a
+/// volume file), in voxels of its grid: the scale of a scan's noise and of a binary mask's staircase. The
+/// command line counts it in the file's coarsest spacing instead (the same for isotropic files), as the
+/// staircase of an anisotropic file is as coarse as that. Chosen on the ball mask: benchmarks/README.md,
+/// "Volumes in and out".
+inline constexpr double kVolumeLengthScaleVoxels = 1.0;
 
 /// The smoothing stage of smooth_mesh on its own: smooth_volume on v with options.smooth, its length
 /// unit (when options.smooth.length_scale is 0) options.length_scale, else default_length_scale (world
@@ -253,8 +255,9 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& options, double defau
 /// The mesh is in the volume's world (its grid's placement). Connectivity::Keep and options.closed have
 /// no input mesh to keep and are refused, as is a scan conversion option (scan.resolution, shell).
 /// 	hrow InvalidInput for bad options or a volume without a surface; as smooth_mesh otherwise.
+/// normal_map, when given, receives the engine's last filtered normal map (smooth_volume).
 PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& options = {}, Progress* progress = nullptr,
-                                   bool want_mesh = true);
+                                   bool want_mesh = true, NormalMap* normal_map = nullptr);
 
 /// Maps a mesh from a volume grid's frame to the world of its file (Placement): positions, normals, and the
 /// faces' orientation where the placement reflects (so they still face outwards). Nothing for the identity.

@@ -235,6 +235,16 @@ TEST(VolumeInput, CliVolumesInAndOutAgreeWithTheMeshPath) {
                            "v = lambda x: a.getValue(g.transform.worldToIndexCellCentered((0.1 + x, -0.2, 0.05))); "
                            "assert v(0) < 0 and abs(v(1)) < h and v(1.2) > 0, (v(0), v(1), v(1.2), h)\" ";
     EXPECT_EQ(run(py + dir / "smoothed.vdb"), 0);
+    // --normal-map adds the filtered normal map as a vector grid: unit vectors, outwards on the sphere.
+    ASSERT_EQ(run(cli + "smooth " + sphere + " " + dir / "normals.vdb --resolution 48 --normal-map" + common), 0);
+    const std::string pyn = "/usr/bin/python3 -c \"import pyopenvdb as vdb, sys, math; g = vdb.read(sys.argv[1], 'normals'); "
+                            "a = g.getConstAccessor(); t = g.transform; c = (0.1, -0.2, 0.05); n = 0; "
+                            "assert g.activeVoxelCount() > 1000, g.activeVoxelCount()\n"
+                            "for d in [(1, 0, 0), (0, -1, 0), (0, 0, 1), (0.6, 0.8, 0)]:\n"
+                            " v = a.getValue(t.worldToIndexCellCentered(tuple(c[i] + d[i] for i in range(3))))\n"
+                            " assert abs(math.sqrt(sum(x * x for x in v)) - 1) < 1e-3 and sum(v[i] * d[i] for i in range(3)) > 0.99, (d, v)\" ";
+    EXPECT_EQ(run(pyn + dir / "normals.vdb"), 0);
+    EXPECT_NE(run(cli + "smooth " + sphere + " " + dir / "normals.nrrd --resolution 48 --normal-map --quiet 2>/dev/null"), 0);
 #endif
 }
 
@@ -258,10 +268,26 @@ TEST(VolumeInput, CliReadsAMaskAndRefusesBadVolumeInput) {
     const std::string j = test::slurp(json);
     EXPECT_NE(j.find("\"surface\":\"label 1 (a binary mask)\""), std::string::npos) << j;
     EXPECT_NE(j.find("\"resampled\":true"), std::string::npos) << j;
+    const auto radial = [&](const Mesh& m) {  // mean and max |distance to c − 6| over the vertices
+        std::pair<double, double> e{0, 0};
+        for (const Vec3f& p : m.positions) {
+            const double d = std::abs(norm(to_d(p) - c) - 6.0);
+            e.first += d / double(m.positions.size());
+            e.second = std::max(e.second, d);
+        }
+        return e;
+    };
     const Mesh m = read_mesh(out);
     EXPECT_TRUE(mesh_report(m).closed);
-    for (const Vec3f& p : m.positions) EXPECT_NEAR(norm(to_d(p) - c), 6.0, 0.35);
+    const auto smoothed = radial(m);
     std::filesystem::remove(out);
+    // extract takes the same reading: the mask's staircase, unsmoothed, within the coarse spacing's half
+    ASSERT_EQ(run(cli + "extract " + mask + " " + out + " --label 1 --quiet"), 0);
+    const auto stairs = radial(read_mesh(out));
+    std::filesystem::remove(out);
+    EXPECT_LT(stairs.second, 0.5 + 0.05);
+    EXPECT_LT(smoothed.second, 0.5);
+    EXPECT_LT(smoothed.first, stairs.first);
 
     // Bad input: one line naming the file and the problem, a non-zero status, no output file.
     const std::string err = dir / "err.txt";
