@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
 #include <new>
 
@@ -61,6 +62,13 @@ bool TerminalProgress::should_stop() { return interrupted(); }
 void TerminalProgress::note(const std::string& line) const {
     if (quiet_) return;
     std::fprintf(stderr, "%s%s\n", show_ ? "\r\033[K" : "", line.c_str());
+}
+
+void refuse_overwriting_input(const std::string& input, const std::string& output) {
+    std::error_code ec;
+    if (input.empty() || output.empty()) return;
+    if (input == output || std::filesystem::equivalent(input, output, ec))
+        throw InvalidInput(output + " is the input file; write the result to another file");
 }
 
 int guarded(const char* command, int (*fn)(void*), void* ctx) {

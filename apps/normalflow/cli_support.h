@@ -61,6 +61,11 @@ std::string attribute_words(const Mesh& m);
 /// 0 ok, 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled.
 int guarded(const char* command, int (*fn)(void*), void* ctx);
 
+/// Nothing the user had is overwritten: an output that is the input file itself (the same path, or a link
+/// to it) is refused before any work.
+/// \throw InvalidInput "OUT is the input file; write the result to another file" (guarded() names the command).
+void refuse_overwriting_input(const std::string& input, const std::string& output);
+
 /// Adds --json and --quiet to a subcommand.
 void add_output_flags(CLI::App* cmd, OutputFlags& out);
 
@@ -94,7 +99,13 @@ void on_run(CLI::App* cmd, std::shared_ptr<Args> args, int (*fn)(const Args&)) {
     cmd->final_callback([cmd, args, fn] {
         struct Ctx { int (*fn)(const Args&); const Args* args; } ctx{fn, args.get()};
         const int status = guarded(cmd->get_name().c_str(),
-                                   [](void* p) { auto* c = static_cast<Ctx*>(p); return c->fn(*c->args); }, &ctx);
+                                   [](void* p) {
+                                       auto* c = static_cast<Ctx*>(p);
+                                       if constexpr (requires { c->args->input; c->args->output; })
+                                           refuse_overwriting_input(c->args->input, c->args->output);
+                                       return c->fn(*c->args);
+                                   },
+                                   &ctx);
         throw CLI::RuntimeError(status);
     });
 }

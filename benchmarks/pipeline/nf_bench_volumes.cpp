@@ -46,6 +46,15 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+/// The volume's zero level set, unsmoothed (volume_to_mesh), and its seconds: each table's baseline.
+std::pair<Mesh, double> extract_timed(const Volume& v) {
+    PipelineOptions raw;
+    raw.smoothing = false;
+    const auto t0 = Clock::now();
+    Mesh m = volume_to_mesh(v, raw);
+    return {std::move(m), since(t0)};
+}
+
 struct Run {
     const char* name;
     SmoothMode mode;
@@ -95,11 +104,7 @@ void balls(const std::vector<Run>& runs) {
         auto t0 = Clock::now();
         const Volume mask = image_to_volume(im, {.surface = {.label = 1.0}});
         const double t_convert = since(t0);
-        PipelineOptions raw;
-        raw.smoothing = false;
-        t0 = Clock::now();
-        const Mesh stairs = volume_to_mesh(mask, raw);
-        const double base = since(t0);
+        const auto [stairs, base] = extract_timed(mask);
         ball_row("the mask, extracted", stairs, c, R, 1.0, base, base);
         std::printf("| (image_to_volume) | | | | %.2f | %.1f |\n", t_convert, t_convert / base);
         for (const Run& r : runs) {
@@ -135,11 +140,7 @@ void mri(const std::string& data) {
     VolumeReadInfo info;
     const Volume v = read_volume(path, in, &info);
     const double t_read = since(t0);
-    PipelineOptions raw;
-    raw.smoothing = false;
-    t0 = Clock::now();
-    const Mesh iso = volume_to_mesh(v, raw);
-    const double base = since(t0);
+    const auto [iso, base] = extract_timed(v);
     std::printf("Read and made a signed distance in %.2f s (%.1f × the extraction); grid %d × %d × %d, %s.\n\n", t_read,
                 t_read / base, v.grid.dims[0], v.grid.dims[1], v.grid.dims[2], info.placed ? "placed by its sform" : "axis-aligned");
     table_head("the isosurface (mm)");
@@ -190,12 +191,9 @@ void label_map(const std::string& data) {
     const double a = 20 * std::numbers::pi / 180;
     const std::array<Vec3d, 3> u{Vec3d{std::cos(a), std::sin(a), 0}, Vec3d{-std::sin(a), std::cos(a), 0}, Vec3d{0, 0, 1}};
     const Volume v = image_to_volume(label_image(brain, u, {0.9, 0.9, 1.5}, 0.5), {.surface = {.label = 1.0}});
-    PipelineOptions raw;
-    raw.smoothing = false;
-    auto t0 = Clock::now();
-    const Mesh stairs = volume_to_mesh(v, raw);
-    const double base = since(t0);
+    const auto [stairs, base] = extract_timed(v);
     table_head("the original (mm)");
+    auto t0 = Clock::now();
     compare_row("label map, extracted", stairs, brain, base, base);
     for (const double L : {1.0, 2.0}) {
         Volume w = v;
@@ -245,10 +243,8 @@ void length_study(const std::string& data) {
         for (int z = 0; z < 2; ++z) {
             const std::array<double, 3> sp{s, s, z ? 2 * s : s};
             const Volume v = image_to_volume(label_image(m, u, sp, s / 2), {.surface = {.label = 1.0}});
-            PipelineOptions raw;
-            raw.smoothing = false;
             std::printf("| %s | %s | %.2f |", name.c_str(), z ? "2 s" : "s",
-                        surface_distance(volume_to_mesh(v, raw), m).mean_normal_angle_deg);
+                        surface_distance(extract_timed(v).first, m).mean_normal_angle_deg);
             for (std::size_t l = 0; l < lengths.size(); ++l) {
                 Volume w = v;
                 PipelineOptions o;

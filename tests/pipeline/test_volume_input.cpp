@@ -298,6 +298,12 @@ TEST(VolumeInput, CliReadsAMaskAndRefusesBadVolumeInput) {
         EXPECT_NE(e.find(says), std::string::npos) << args << "\n" << e;
         EXPECT_FALSE(std::filesystem::exists(out)) << args;
     };
+    {  // the input itself as the output: refused before anything is written, the file unchanged
+        const std::string before = test::slurp(mask);
+        refused("smooth " + mask + " " + mask, "is the input file");
+        refused("extract " + mask + " " + dir.path().string() + "/./mask.nhdr --label 1", "is the input file");
+        EXPECT_EQ(test::slurp(mask), before);
+    }
     refused("smooth " + mask + " " + out + " --iso 0.5 --label 1", "either an iso value or a label");
     refused("smooth " + mask + " " + out + " --resolution 64", "--resolution applies to a mesh input");
     refused("smooth " + mask + " " + out + " --label 7", "holds no surface");
