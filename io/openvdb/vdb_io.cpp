@@ -1,4 +1,5 @@
 #include "io/openvdb/vdb_io.h"
+#include "io/openvdb/vdb_adapters.h"
 
 #include <openvdb/io/File.h>
 #include <openvdb/io/Stream.h>
@@ -126,6 +127,16 @@ openvdb::math::Transform::Ptr make_transform(double h, const std::array<Vec3d, 3
     m(3, 1) = origin.y;
     m(3, 2) = origin.z;
     return openvdb::math::Transform::createLinearTransform(m);
+}
+
+/// The transform of a grid: index (i, j, k) at placement.point(origin + h · (i, j, k)).
+openvdb::math::Transform::Ptr to_openvdb_transform(const Grid& g) {
+    if (g.placement.is_identity()) {
+        openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(g.voxel_size);
+        xf->postTranslate(openvdb::Vec3d(g.origin.x, g.origin.y, g.origin.z));
+        return xf;
+    }
+    return make_transform(g.voxel_size, g.placement.rotation, g.placement.point(g.origin));
 }
 
 bool axis_aligned(const std::array<Vec3d, 3>& r) {
@@ -317,11 +328,11 @@ openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::s
 
 }  // namespace
 
-Volume read_vdb(const std::string& path) {
-    init_openvdb();
-    const std::string who = "read_vdb: " + path;
-    openvdb::FloatGrid::Ptr grid = read_grid_isolated(path, who);
-    // A copy: the fog branch below replaces grid. Checked in the child: linear, uniform scale h.
+namespace {
+
+/// from_openvdb on a grid it may change (tiles voxelized, a fog volume replaced by its level set).
+Volume volume_from_grid(openvdb::FloatGrid::Ptr grid, const std::string& who) {
+    // A copy: the fog branch below replaces grid.
     const openvdb::math::Transform xf = grid->transform();
     const Frame frame = check_transform(xf, who);
     const double h = frame.h;
@@ -419,26 +430,26 @@ Volume read_vdb(const std::string& path) {
     return vol;
 }
 
-void write_vdb(const std::string& path, const Volume& v, const NormalMap* normals) {
-    init_openvdb();
-    const std::string who = "write_vdb: " + path;
-    const Grid& g = v.grid;
-    v.check(who);
-    if (normals)
-        for (const Volume& c : *normals) {
-            c.check(who + ": normal map");
-            if (c.grid.dims != g.dims || c.grid.voxel_size != g.voxel_size || !(c.grid.origin == g.origin))
-                throw InvalidInput(who + ": the normal map is not on the volume's grid");
-        }
+}  // namespace
 
+Volume from_openvdb(const openvdb::FloatGrid& grid, const std::string& who) {
+    init_openvdb();
+    return volume_from_grid(grid.deepCopy(), who);
+}
+
+Volume read_vdb(const std::string& path) {
+    init_openvdb();
+    const std::string who = "read_vdb: " + path;
+    return volume_from_grid(read_grid_isolated(path, who), who);  // its transform checked in the child too
+}
+
+namespace {
+
+/// The level set of v (checked by the caller).
+openvdb::FloatGrid::Ptr grid_from_volume(const Volume& v) {
+    const Grid& g = v.grid;
     openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(v.background);
-    if (g.placement.is_identity()) {
-        openvdb::math::Transform::Ptr xf = openvdb::math::Transform::createLinearTransform(g.voxel_size);
-        xf->postTranslate(openvdb::Vec3d(g.origin.x, g.origin.y, g.origin.z));
-        grid->setTransform(xf);
-    } else {
-        grid->setTransform(make_transform(g.voxel_size, g.placement.rotation, g.placement.point(g.origin)));
-    }
+    grid->setTransform(to_openvdb_transform(g));
     grid->setGridClass(openvdb::GRID_LEVEL_SET);
     grid->setName("surface");
     grid->insertMeta(kDimsKey, openvdb::Vec3IMetadata(openvdb::Vec3i(g.dims[0], g.dims[1], g.dims[2])));
@@ -464,30 +475,66 @@ void write_vdb(const std::string& path, const Volume& v, const NormalMap* normal
                 if (v.block_table[v.table_index(bi, bj, bk)] == kBlockInside)
                     tree.addTile(1, openvdb::Coord(bi * kBlockDim, bj * kBlockDim, bk * kBlockDim), -v.background, false);
     openvdb::tools::prune(tree);
-    openvdb::GridPtrVec grids{grid};
-    if (normals) {
-        // The filtered normal map: unit vectors in world space where the engine defined them, active there.
-        openvdb::Vec3SGrid::Ptr ng = openvdb::Vec3SGrid::create(openvdb::Vec3f(0, 0, 0));
-        ng->setTransform(grid->transform().copy());
-        ng->setName("normals");
-        ng->setVectorType(openvdb::VEC_COVARIANT_NORMALIZE);
-        ng->setIsInWorldSpace(true);
-        auto acc = ng->getAccessor();
-        const Volume& nx = (*normals)[0];
-        for (std::size_t b = 0; b < nx.block_count(); ++b) {
-            const auto& bc = nx.block_coords[b];
-            for (int lk = 0; lk < kBlockDim; ++lk)
-                for (int lj = 0; lj < kBlockDim; ++lj)
-                    for (int li = 0; li < kBlockDim; ++li) {
-                        const int i = bc[0] * kBlockDim + li, j = bc[1] * kBlockDim + lj, k = bc[2] * kBlockDim + lk;
-                        const Vec3d n{nx.value(i, j, k), (*normals)[1].value(i, j, k), (*normals)[2].value(i, j, k)};
-                        if (n.x == kNoNormal || n.y == kNoNormal || n.z == kNoNormal || !g.contains(i, j, k)) continue;
-                        const Vec3d w = g.placement.direction(n);
-                        acc.setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3f(float(w.x), float(w.y), float(w.z)));
-                    }
-        }
-        grids.push_back(ng);
+    return grid;
+}
+
+/// Checks that a normal map lies on v's grid and passes Volume::check.
+void check_normal_map(const NormalMap& normals, const Volume& v, const std::string& who) {
+    for (const Volume& c : normals) {
+        c.check(who + ": normal map");
+        if (c.grid.dims != v.grid.dims || c.grid.voxel_size != v.grid.voxel_size || !(c.grid.origin == v.grid.origin))
+            throw InvalidInput(who + ": the normal map is not on the volume's grid");
     }
+}
+
+/// The normal map as a vector grid (checked by the caller).
+openvdb::Vec3SGrid::Ptr grid_from_normals(const NormalMap& normals, const Volume& v) {
+    const Grid& g = v.grid;
+    // Unit vectors in world space where the engine defined them, active there; v's transform.
+    openvdb::Vec3SGrid::Ptr ng = openvdb::Vec3SGrid::create(openvdb::Vec3f(0, 0, 0));
+    ng->setTransform(to_openvdb_transform(g));
+    ng->setName("normals");
+    ng->setVectorType(openvdb::VEC_COVARIANT_NORMALIZE);
+    ng->setIsInWorldSpace(true);
+    auto acc = ng->getAccessor();
+    const Volume& nx = normals[0];
+    for (std::size_t b = 0; b < nx.block_count(); ++b) {
+        const auto& bc = nx.block_coords[b];
+        for (int lk = 0; lk < kBlockDim; ++lk)
+            for (int lj = 0; lj < kBlockDim; ++lj)
+                for (int li = 0; li < kBlockDim; ++li) {
+                    const int i = bc[0] * kBlockDim + li, j = bc[1] * kBlockDim + lj, k = bc[2] * kBlockDim + lk;
+                    const Vec3d n{nx.value(i, j, k), normals[1].value(i, j, k), normals[2].value(i, j, k)};
+                    if (n.x == kNoNormal || n.y == kNoNormal || n.z == kNoNormal || !g.contains(i, j, k)) continue;
+                    const Vec3d w = g.placement.direction(n);
+                    acc.setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3f(float(w.x), float(w.y), float(w.z)));
+                }
+    }
+    return ng;
+}
+
+}  // namespace
+
+openvdb::FloatGrid::Ptr to_openvdb(const Volume& v) {
+    init_openvdb();
+    v.check("to_openvdb");
+    return grid_from_volume(v);
+}
+
+openvdb::Vec3SGrid::Ptr to_openvdb(const NormalMap& normals, const Volume& v) {
+    init_openvdb();
+    v.check("to_openvdb");
+    check_normal_map(normals, v, "to_openvdb");
+    return grid_from_normals(normals, v);
+}
+
+void write_vdb(const std::string& path, const Volume& v, const NormalMap* normals) {
+    init_openvdb();
+    const std::string who = "write_vdb: " + path;
+    v.check(who);
+    if (normals) check_normal_map(*normals, v, who);
+    openvdb::GridPtrVec grids{grid_from_volume(v)};
+    if (normals) grids.push_back(grid_from_normals(*normals, v));
 
     AtomicFile out(path, "write_vdb");
     try {
