@@ -5,13 +5,13 @@
 
 #include <string>
 
+#include "build_licence.h"
 #include "commands.h"
-#include "core/version.h"
 
 int main(int argc, char** argv) {
     using namespace normalflow::cli;
     CLI::App app{"normalflow: geometric surface processing via normal maps (Tasdizen et al. 2003)"};
-    app.set_version_flag("--version", std::string("normalflow ") + normalflow::version());
+    app.set_version_flag("--version", version_text());
     app.require_subcommand(1);
     // One line per subcommand (declared in commands.h).
     add_info_command(app);
