@@ -4,6 +4,7 @@
 #include <normalflow/io/io.h>
 
 #include <cstdio>
+#include <string>
 
 int main(int argc, char** argv) {
     if (argc < 2) return 2;
@@ -14,6 +15,11 @@ int main(int argc, char** argv) {
     const normalflow::Mesh r = normalflow::read_mesh(argv[1]);
     if (r.positions != m.positions || r.triangles != m.triangles) {
         std::printf("consumer: round trip differs\n");
+        return 1;
+    }
+    static_assert(NORMALFLOW_VERSION >= 200, "the version macros come with the installed headers");
+    if (std::string(normalflow::version()) != NORMALFLOW_VERSION_STRING) {
+        std::printf("consumer: library %s, headers %s\n", normalflow::version(), NORMALFLOW_VERSION_STRING);
         return 1;
     }
     std::printf("consumer ok (normalflow %s)\n", normalflow::version());
