@@ -584,13 +584,7 @@ Volume NrrdReader::read_volume(const VolumeReadOptions& opt) {
                     if (std::abs(dot(u[a], u[b])) > 1e-5)
                         bad("space directions are not orthogonal (" + geo.text +
                             "); a volume needs orthogonal axes of equal length");
-            // Orthonormal to rounding: Gram-Schmidt, the third axis keeping the file's handedness.
-            Placement& pl = g.placement;
-            pl.rotation[0] = u[0];
-            pl.rotation[1] = normalized(u[1] - u[0] * dot(u[0], u[1]));
-            pl.rotation[2] = cross(pl.rotation[0], pl.rotation[1]);
-            if (dot(pl.rotation[2], u[2]) < 0) pl.rotation[2] = -pl.rotation[2];
-            pl.translation = geo.origin;
+            g.placement = placement_from_axes(geo.axes, geo.origin);  // orthonormal to rounding, the file's handedness
             g.origin = Vec3d{};
         }
     }

@@ -29,6 +29,7 @@
 #include "core/errors.h"
 #include "io/util/atomic_file.h"
 #include "io/util/isolate.h"
+#include "sdf/image_to_volume.h"
 
 namespace normalflow {
 
@@ -110,8 +111,8 @@ Frame check_transform(const openvdb::math::Transform& xf, const std::string& who
             if (std::abs(dot(d[a], d[b])) > 1e-6 * f.h * f.h)
                 throw InvalidInput(who + ": grid transform is sheared (voxel axes " + std::to_string(b) + " and " +
                                    std::to_string(a) + " are not orthogonal)");
-        f.rotation[a] = d[a] / f.h;
     }
+    f.rotation = placement_from_axes(d, f.origin).rotation;  // orthonormal to rounding
     return f;
 }
 

@@ -523,7 +523,6 @@ PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress
     v.check("smooth_volume_input");
     PipelineResult result;
     PipelineReport& r = result.report;
-    r.repaired = false;
     r.scan.grid = v.grid;
     if (o.smoothing) smooth_volume_stage(v, o, kVolumeLengthScaleVoxels * v.grid.voxel_size, &r, progress, normal_map);
     if (want_mesh) result.mesh = volume_to_mesh(v, o, &r, progress);

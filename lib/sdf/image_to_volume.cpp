@@ -34,6 +34,16 @@ struct Field {
 
 }  // namespace
 
+Placement placement_from_axes(const std::array<Vec3d, 3>& axes, const Vec3d& origin) {
+    Placement p;
+    p.rotation[0] = normalized(axes[0]);
+    p.rotation[1] = normalized(axes[1] - p.rotation[0] * dot(p.rotation[0], axes[1]));
+    p.rotation[2] = cross(p.rotation[0], p.rotation[1]);
+    if (dot(p.rotation[2], axes[2]) < 0) p.rotation[2] = -p.rotation[2];
+    p.translation = origin;
+    return p;
+}
+
 void check_image(const ScalarImage& image, const char* who) {
     const auto bad = [&](const std::string& what) { throw InvalidInput(std::string(who) + ": image " + what); };
     for (int a = 0; a < 3; ++a)
@@ -93,16 +103,7 @@ Volume image_to_volume(const ScalarImage& image, const ImageToVolumeOptions& opt
         (&e.x)[a] = 1.0;
         aligned = aligned && norm(image.axes[a] / spacing[a] - e) < 1e-9;
     }
-    if (!aligned) {
-        // Gram–Schmidt on the (orthogonal to 1e-4) directions, so the rotation is orthonormal to rounding.
-        Vec3d u0 = image.axes[0] / spacing[0];
-        Vec3d u1 = image.axes[1] - u0 * dot(u0, image.axes[1]);
-        u1 = u1 / norm(u1);
-        Vec3d u2 = image.axes[2] - u0 * dot(u0, image.axes[2]) - u1 * dot(u1, image.axes[2]);
-        u2 = u2 / norm(u2);
-        placement.rotation = {u0, u1, u2};
-        placement.translation = image.origin;
-    }
+    if (!aligned) placement = placement_from_axes(image.axes, image.origin);  // orthogonal to 1e-4 (checked)
     const double h = options.voxel_size > 0 ? options.voxel_size : std::min({spacing[0], spacing[1], spacing[2]});
     Grid g;
     g.voxel_size = h;

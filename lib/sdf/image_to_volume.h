@@ -51,6 +51,13 @@ struct ImageToVolumeOptions {
     double voxel_size = 0.0;
 };
 
+/// The Placement of a grid whose axes point along `axes` (orthogonal, any lengths; callers check both),
+/// with translation `origin`: the unit directions made orthonormal to rounding (Gram–Schmidt: the first
+/// axis kept, the second made orthogonal to it, the third their cross product turned to the axes' own
+/// handedness, so a left-handed frame stays a reflection). What image and volume readers place their
+/// grids by.
+Placement placement_from_axes(const std::array<Vec3d, 3>& axes, const Vec3d& origin);
+
 /// Checks an image: dims >= 1, values.size() == dims product, finite values, origin and axes, axes of
 /// non-zero length and orthogonal (within 1e-4 of a right angle).
 /// \throw InvalidInput "who: ..." naming the problem.
