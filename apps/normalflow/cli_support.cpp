@@ -71,30 +71,33 @@ void refuse_overwriting_input(const std::string& input, const std::string& outpu
         throw InvalidInput(output + " is the input file; write the result to another file");
 }
 
+ErrorStatus error_status(std::exception_ptr error) {
+    try {
+        std::rethrow_exception(error);
+    } catch (const Cancelled& e) {
+        return {130, "cancelled"};
+    } catch (const InvalidInput& e) {
+        return {3, e.what()};
+    } catch (const IoError& e) {
+        return {4, e.what()};
+    } catch (const NumericalError& e) {
+        return {5, std::string("numerical error: ") + e.what()};
+    } catch (const OutOfMemory& e) {
+        return {6, e.what()};
+    } catch (const std::bad_alloc&) {
+        return {6, "out of memory"};
+    } catch (const std::exception& e) {
+        return {1, e.what()};
+    }
+}
+
 int guarded(const char* command, int (*fn)(void*), void* ctx) {
     try {
         return fn(ctx);
-    } catch (const Cancelled& e) {
-        std::fprintf(stderr, "normalflow %s: cancelled\n", command);
-        return 130;
-    } catch (const InvalidInput& e) {
-        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
-        return 3;
-    } catch (const IoError& e) {
-        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
-        return 4;
-    } catch (const NumericalError& e) {
-        std::fprintf(stderr, "normalflow %s: numerical error: %s\n", command, e.what());
-        return 5;
-    } catch (const OutOfMemory& e) {
-        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
-        return 6;
-    } catch (const std::bad_alloc&) {
-        std::fprintf(stderr, "normalflow %s: out of memory\n", command);
-        return 6;
-    } catch (const std::exception& e) {
-        std::fprintf(stderr, "normalflow %s: %s\n", command, e.what());
-        return 1;
+    } catch (...) {
+        const ErrorStatus e = error_status(std::current_exception());
+        std::fprintf(stderr, "normalflow %s: %s\n", command, e.message.c_str());
+        return e.status;
     }
 }
 

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <exception>
 #include <map>
 #include <memory>
 #include <string>
@@ -56,6 +57,13 @@ std::size_t parse_bytes(const std::string& text, const char* option);
 /// text line ("normals, colours, texture coordinates"; "none").
 std::vector<std::string> attribute_names(const Mesh& m);
 std::string attribute_words(const Mesh& m);
+
+/// An exception of normalflow's as an exit status and a one-line message (guarded() prints it after the command).
+struct ErrorStatus {
+    int status;           ///< 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled
+    std::string message;
+};
+ErrorStatus error_status(std::exception_ptr error);
 
 /// Runs fn, mapping normalflow's exceptions to one line on stderr and an exit status:
 /// 0 ok, 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled.

@@ -1,0 +1,165 @@
+"""normalflow: geometric surface processing via normal maps (Tasdizen, Whitaker, Burchard & Osher 2003).
+
+Meshes go in as numpy arrays (``vertices`` (n, 3), ``faces`` (m, 3)) or as :class:`Mesh` objects, and come
+back as :class:`Mesh` objects whose ``vertices``, ``faces``, ``normals``, ``colors`` and ``texcoords`` are
+numpy views of the result (no copy). Every call returns ``(result, report)``; the report is a dict with the
+keys of the command line's ``--json``.
+
+The options of :func:`smooth`, :func:`voxelize` and :func:`extract` are the command line's flags, as keyword
+arguments (``--target-faces 20000`` is ``target_faces=20000``, ``--no-repair`` is ``repair=False``): the
+same defaults, checks and results as ``normalflow smooth``. :func:`options` lists them.
+
+    >>> import normalflow as nf
+    >>> mesh = nf.read_mesh("part.ply")
+    >>> out, report = nf.smooth(mesh, target_faces=20000)
+    >>> nf.write_mesh("part_smoothed.ply", out)
+
+Long calls release the GIL; ``progress(stage, fraction)`` is called on the calling thread, and Ctrl-C
+(KeyboardInterrupt), or an exception raised by the callback, stops the run at its next check and is raised.
+"""
+import json as _json
+import re as _re
+
+from . import _normalflow as _nf
+from ._normalflow import (Cancelled, InvalidInput, IoError, Mesh, NumericalError, OutOfMemory, Volume,  # noqa: F401
+                          __version__)
+
+__all__ = ["Mesh", "Volume", "read_mesh", "write_mesh", "read_volume", "image_to_volume", "smooth", "voxelize",
+           "extract", "compare", "noise", "taubin", "options", "InvalidInput", "IoError", "NumericalError",
+           "OutOfMemory", "Cancelled", "__version__"]
+
+
+def _mesh(mesh_or_vertices, faces=None):
+    if isinstance(mesh_or_vertices, Mesh):
+        if faces is not None:
+            raise TypeError("faces given with a Mesh")
+        return mesh_or_vertices
+    if faces is None:
+        raise TypeError("expected a Mesh, or vertices and faces")
+    return Mesh(mesh_or_vertices, faces)
+
+
+def _flags(command, kwargs):
+    """Keyword arguments as the command line's flags: name=value is --name value; name=True is --name (or
+    nothing where --no-name exists); name=False is --no-name (or nothing where --name exists)."""
+    known = set(_nf.flag_names(command))
+    args = []
+    for key, value in kwargs.items():
+        flag = "--" + key.replace("_", "-")
+        no_flag = "--no-" + key.replace("_", "-")
+        if isinstance(value, bool):
+            if flag not in known and no_flag not in known:
+                raise TypeError(f"{command}() got an unexpected keyword argument '{key}'")
+            if value and flag in known:
+                args.append(flag)
+            elif not value and no_flag in known:
+                args.append(no_flag)
+            continue
+        if flag not in known:
+            raise TypeError(f"{command}() got an unexpected keyword argument '{key}'")
+        if value is None:
+            continue
+        args += [flag, repr(value) if isinstance(value, float) else str(value)]
+    return args
+
+
+def _call(fn, *args):
+    try:
+        return fn(*args)
+    except InvalidInput as e:  # the flags' names as the keyword arguments they came from
+        raise InvalidInput(_re.sub(r"--([a-z][a-z0-9-]*)", lambda m: m.group(1).replace("-", "_"), str(e))) from None
+
+
+def options(command="smooth"):
+    """The keyword arguments of smooth, voxelize or extract, with their help (the command line's)."""
+    return _nf.flag_help(command)
+
+
+def read_mesh(path):
+    """Reads OBJ, PLY, OFF, STL, glTF/GLB or Draco (.drc) as a Mesh."""
+    return _nf.read_mesh(str(path))
+
+
+def write_mesh(path, mesh, faces=None):
+    """Writes a Mesh (or vertices, faces) by the path's extension; the file is written whole or not at all."""
+    _nf.write_mesh(str(path), _mesh(mesh, faces))
+
+
+def read_volume(path, iso=None, label=None, negate=False, voxel_size=0.0):
+    """Reads .vdb, .nrrd, .nhdr, .nii or .nii.gz as a signed distance Volume (see normalflow smooth --iso, --label,
+    --negate: a scalar image needs iso, a label map label; a binary mask needs neither)."""
+    return _nf.read_volume(str(path), iso, label, negate, voxel_size)
+
+
+def image_to_volume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0), iso=None, label=None, negate=False,
+                    voxel_size=0.0):
+    """A dense image (a 3-D array indexed [i, j, k]) as a signed distance Volume: the surface where the value is iso
+    (inside above it), of the voxels labelled label, or of a binary mask's foreground."""
+    return _nf.image_to_volume(values, [float(s) for s in spacing], [float(o) for o in origin], iso, label, negate,
+                               float(voxel_size))
+
+
+def smooth(mesh, faces=None, *, progress=None, **options):
+    """The whole pipeline (normalflow smooth): scan conversion, the normal map filtered on the surface and the
+    volume refitted to it, then the result handed back. ``mesh`` is a Mesh, vertices with ``faces``, or a Volume
+    (then ``volume=True`` returns the smoothed Volume instead of its surface).
+
+    Returns (Mesh or Volume, report dict)."""
+    if isinstance(mesh, Volume):
+        want_volume = bool(options.pop("volume", False))
+        out, report = _call(_nf.smooth_volume, mesh, _flags("smooth", options), progress, not want_volume)
+    else:
+        out, report = _call(_nf.smooth, _mesh(mesh, faces), _flags("smooth", options), progress)
+    return out, _json.loads(report)
+
+
+def voxelize(mesh, faces=None, *, progress=None, **options):
+    """Scan conversion (normalflow voxelize): a narrow-band signed distance Volume of the mesh.
+
+    Returns (Volume, report dict)."""
+    volume, report = _call(_nf.voxelize, _mesh(mesh, faces), _flags("voxelize", options), progress)
+    return volume, _json.loads(report)
+
+
+def extract(volume, *, progress=None, **options):
+    """The zero level set of a Volume as a closed manifold Mesh (normalflow extract), decimated with target_faces
+    or max_error. Returns (Mesh, report dict)."""
+    out, report = _call(_nf.extract, volume, _flags("extract", options), progress)
+    return out, _json.loads(report)
+
+
+def compare(reference, candidate, *, samples=None, seed=None, crease_angle=None, crease_radius=None,
+            correspondence=False, self_intersections=True):
+    """Compares a candidate with a reference without vertex correspondence (normalflow compare): distances both
+    ways, normal angle, area, volume, crease preservation, topology. Each is a Mesh or a (vertices, faces) pair.
+
+    Returns the report dict; its "candidates"[0] holds the candidate's figures."""
+    d = _nf.COMPARE_DEFAULTS
+    ref = reference if isinstance(reference, Mesh) else _mesh(*reference)
+    cand = candidate if isinstance(candidate, Mesh) else _mesh(*candidate)
+    return _json.loads(_nf.compare(ref, cand, d["samples"] if samples is None else samples,
+                                   d["seed"] if seed is None else seed,
+                                   d["crease_angle"] if crease_angle is None else crease_angle,
+                                   d["crease_radius"] if crease_radius is None else crease_radius,
+                                   correspondence, self_intersections))
+
+
+def noise(mesh, faces=None, *, sigma=None, seed=None, kind="gaussian", direction="normal", fraction=None):
+    """Synthetic noise (normalflow noise): sigma in mean edge lengths, deterministic for a seed.
+    Returns (Mesh, report dict)."""
+    d = _nf.NOISE_DEFAULTS
+    out, report = _nf.noise(_mesh(mesh, faces), d["sigma"] if sigma is None else sigma,
+                            d["seed"] if seed is None else seed, kind, direction,
+                            d["fraction"] if fraction is None else fraction)
+    return out, _json.loads(report)
+
+
+def taubin(mesh, faces=None, *, iterations=None, lambda_=None, mu=None, fix_boundary=True, progress=None):
+    """Taubin's lambda|mu smoothing (normalflow taubin), the mesh-side baseline. Returns (Mesh, report dict)."""
+    if not hasattr(_nf, "taubin"):
+        raise InvalidInput("taubin: this build has no OpenMesh (NORMALFLOW_WITH_OPENMESH=OFF)")
+    d = _nf.TAUBIN_DEFAULTS
+    out, report = _nf.taubin(_mesh(mesh, faces), d["iterations"] if iterations is None else iterations,
+                             d["lambda_"] if lambda_ is None else lambda_, d["mu"] if mu is None else mu,
+                             fix_boundary, progress)
+    return out, _json.loads(report)
