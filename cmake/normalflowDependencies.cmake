@@ -5,6 +5,7 @@ if(NOT TARGET TBB::tbb)
   find_package(TBB CONFIG REQUIRED COMPONENTS tbb tbbmalloc)
 endif()
 find_package(Threads REQUIRED)
+find_package(ZLIB)   # optional: gzip (NIfTI .nii.gz, PNG pictures); io/formats and io/render use it when found
 
 if(NORMALFLOW_WITH_CGAL AND NOT TARGET CGAL::CGAL)
   set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
@@ -13,11 +14,14 @@ endif()
 
 if(NORMALFLOW_WITH_OPENVDB AND NOT TARGET OpenVDB::openvdb)
   # Debian ships only a Find module, outside the default module path.
+  # FindOpenVDB sets BUILD_SHARED_LIBS ON for the whole project when it finds a shared OpenVDB: keep ours.
   set(_nf_saved_module_path ${CMAKE_MODULE_PATH})
+  set(_nf_saved_shared ${BUILD_SHARED_LIBS})
   file(GLOB _nf_vdb_dirs /usr/lib/*/cmake/OpenVDB /usr/lib/cmake/OpenVDB /usr/local/lib/cmake/OpenVDB)
   list(APPEND CMAKE_MODULE_PATH ${_nf_vdb_dirs})
   find_package(OpenVDB REQUIRED)
   set(CMAKE_MODULE_PATH ${_nf_saved_module_path})
+  set(BUILD_SHARED_LIBS ${_nf_saved_shared})
 endif()
 
 if(NORMALFLOW_WITH_DRACO AND NOT TARGET draco::draco)
@@ -38,6 +42,7 @@ if(NORMALFLOW_WITH_TETGEN AND NOT TARGET normalflow_tetgen_lib)
   # that carries TETLIBRARY (tetgen.h must see it; the library was built with it).
   find_path(TETGEN_INCLUDE_DIR tetgen.h REQUIRED)
   find_library(TETGEN_LIBRARY tet REQUIRED)
+  get_filename_component(TETGEN_LIBRARY_DIR "${TETGEN_LIBRARY}" DIRECTORY)
   add_library(normalflow_tetgen_lib UNKNOWN IMPORTED)
   set_target_properties(normalflow_tetgen_lib PROPERTIES
     IMPORTED_LOCATION "${TETGEN_LIBRARY}"
