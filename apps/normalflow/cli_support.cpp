@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <new>
 
@@ -139,6 +140,52 @@ std::string attribute_words(const Mesh& m) {
     add(m.has_colors(), "colours");
     add(m.has_texcoords(), "texture coordinates");
     return out.empty() ? "none" : out;
+}
+
+void add_config_option(CLI::App* cmd) {
+    cmd->add_option("--config", "read flags from a TOML or INI file: one `name = value` per line, names as the long "
+                                "flags (mode = \"isotropic\", target-faces = 20000, repair = false); flags given "
+                                "here win")
+        ->type_name("FILE");
+}
+
+void apply_config_file(CLI::App* cmd) {
+    const CLI::Option* config = cmd->get_option_no_throw("--config");
+    if (!config || config->count() == 0) return;
+    const std::string file = config->as<std::string>();
+    std::vector<CLI::ConfigItem> items;
+    {
+        std::ifstream in(file);
+        if (!in) throw IoError(file + ": cannot read the config file");
+        try {
+            items = CLI::ConfigTOML().from_config(in);
+        } catch (const CLI::Error& e) {
+            throw InvalidInput(file + ": " + e.what());
+        }
+    }
+    for (const CLI::ConfigItem& item : items) {
+        if (item.name == "++" || item.name == "--") continue;  // a section's start and end
+        if (!item.parents.empty() && !(item.parents.size() == 1 && item.parents[0] == cmd->get_name()))
+            throw InvalidInput(file + ": [" + item.parents[0] + "]: only the [" + cmd->get_name() + "] section applies here");
+        std::string name = item.name;
+        std::vector<std::string> inputs = item.inputs;
+        CLI::Option* op = cmd->get_option_no_throw("--" + name);
+        if (!op && inputs.size() == 1 && (inputs[0] == "true" || inputs[0] == "false") &&
+            (op = cmd->get_option_no_throw("--no-" + name))) {  // repair = false is --no-repair
+            name = "no-" + name;
+            inputs[0] = inputs[0] == "true" ? "false" : "true";
+        }
+        if (!op || op == config)
+            throw InvalidInput(file + ": " + item.name + ": not a flag of " + cmd->get_name());
+        if (op->count() > 0) continue;  // given on the command line
+        try {
+            for (std::string& in : inputs) in = op->get_flag_value(name, in);  // a flag's value (inverted for !--no-x)
+            op->add_result(inputs);
+            op->run_callback();
+        } catch (const CLI::Error& e) {
+            throw InvalidInput(file + ": " + item.name + ": " + e.what());
+        }
+    }
 }
 
 CLI::Option* add_decimator_option(CLI::App* cmd, Decimator& target) {

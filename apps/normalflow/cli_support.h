@@ -100,15 +100,26 @@ CLI::Option* add_enum_option(CLI::App* cmd, const std::string& flag, E& target, 
 /// Adds --decimator auto|quadric|meshoptimizer|cgal (what --target-faces runs, decimate_mesh).
 CLI::Option* add_decimator_option(CLI::App* cmd, Decimator& target);
 
+/// --config FILE: the command's flags from a TOML or INI file (`name = value`, names as the long flags without
+/// dashes); flags given on the command line win. Applied by on_run (apply_config_file) before the command runs.
+void add_config_option(CLI::App* cmd);
+
+/// Sets every option of cmd that the command line left unset and --config's file names, through the option's own
+/// checks. Nothing when cmd has no --config or it was not given.
+/// \throw InvalidInput naming the file and the key: an unknown key, a bad value, a section other than cmd's.
+/// \throw IoError when the file cannot be read.
+void apply_config_file(CLI::App* cmd);
+
 /// Makes cmd run fn(*args) under guarded() once parsed; the exit status reaches main() as a
 /// CLI::RuntimeError, which CLI::App::exit returns without printing.
 template <class Args>
 void on_run(CLI::App* cmd, std::shared_ptr<Args> args, int (*fn)(const Args&)) {
     cmd->final_callback([cmd, args, fn] {
-        struct Ctx { int (*fn)(const Args&); const Args* args; } ctx{fn, args.get()};
+        struct Ctx { int (*fn)(const Args&); const Args* args; CLI::App* cmd; } ctx{fn, args.get(), cmd};
         const int status = guarded(cmd->get_name().c_str(),
                                    [](void* p) {
                                        auto* c = static_cast<Ctx*>(p);
+                                       apply_config_file(c->cmd);
                                        if constexpr (requires { c->args->input; c->args->output; })
                                            refuse_overwriting_input(c->args->input, c->args->output);
                                        return c->fn(*c->args);

@@ -139,6 +139,7 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
         PipelineResult r = smooth_volume_input(v, opt, &progress);
         result = std::move(r.mesh);
         report = std::move(r.report);
+        j.set("parameters", parameters_json(opt, report, v.grid.voxel_size));
         j.set("input", Json::object().set("format", info.format).set("surface", info.surface));
     } else {
         if (a.volume.iso || a.volume.label || a.volume.negate)
@@ -148,6 +149,7 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
         PipelineResult r = smooth_mesh(mesh, opt, &progress);
         result = std::move(r.mesh);
         report = std::move(r.report);
+        j.set("parameters", parameters_json(opt, report, report.scan.grid.voxel_size));
         j.set("input", Json::object().set("format", info.format).set("vertices", mesh.positions.size())
                            .set("triangles", mesh.triangles.size()));
     }
@@ -265,6 +267,7 @@ void add_batch_command(CLI::App& app) {
     add_grid_options(cmd, a->pipeline);
     add_volume_input_options(cmd, a->volume, /*voxel_size=*/false);
     add_smooth_options(cmd, a->pipeline);
+    add_config_option(cmd);
     add_decimation_options(cmd, a->pipeline);
     add_draco_options(cmd, a->draco);
     add_output_flags(cmd, a->out);

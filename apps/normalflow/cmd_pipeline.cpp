@@ -11,6 +11,7 @@
 #include "pipeline_options.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
+#include "core/version.h"
 #include "io/io.h"
 #include "io/pipeline/pipeline.h"
 #include "io/pipeline/report_json.h"
@@ -122,6 +123,7 @@ void write_result(const std::string& output, const Mesh& m, TerminalProgress& pr
 
 void finish(Json& j, const OutputFlags& f, const Stopwatch& total, TerminalProgress& progress) {
     j["seconds"].set("total", total.seconds());
+    j.set("version", version());
     j.set("peak_memory_bytes", peak_memory_bytes());
     if (f.json) std::printf("%s\n", j.dump().c_str());
     for (const std::string& w : j["warnings"].strings()) progress.note("warning: " + w);
@@ -203,6 +205,7 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     Json j = Json::object();
     j.set("command", "smooth").set("mode", to_string(opt.smooth.mode)).set("input", volume_input_json(a.input, info, v));
     j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
+    j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
     if (!volume_out) j.set("extract", to_json(r.extract));
     if (r.decimated) j.set("decimate", to_json(r.decimate));
     Json sec = Json::object();
@@ -254,6 +257,7 @@ int run_smooth(const SmoothArgs& a) {
         });
         Json j = report_json("smooth", r, t_read, &info);
         j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
+        j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
         write_volume_result(a.output, v, progress, j, &normals);
         finish(j, a.out, total, progress);
         progress.note("smooth: " + a.output + " (the smoothed volume, " + std::to_string(v.block_count()) + " blocks)");
@@ -264,6 +268,7 @@ int run_smooth(const SmoothArgs& a) {
     const Mesh& m = result.mesh;
     Json j = report_json("smooth", r, t_read, &info);
     j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
+    j.set("parameters", parameters_json(opt, r, r.scan.grid.voxel_size));
     j["seconds"].set("extract", r.seconds.extract);
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
     if (r.smooth.stopped_unchanged)
@@ -317,6 +322,7 @@ void add_smooth_command(CLI::App& app) {
     add_grid_options(cmd, a->pipeline);
     add_volume_input_options(cmd, a->volume, /*voxel_size=*/false);
     add_smooth_options(cmd, a->pipeline);
+    add_config_option(cmd);
     cmd->add_flag("--normal-map", a->normal_map,
                   "with a .vdb output: also write the filtered normal map, a vector grid \"normals\"");
     add_decimation_options(cmd, a->pipeline);

@@ -148,4 +148,33 @@ Json to_json(const PipelineReport& r) {
     return j;
 }
 
+Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double voxel_size) {
+    const ScanConvertOptions& scan = r.scan_options;  // as run: the automatic resolution and the band rule applied
+    SmoothOptions s = o.smooth;  // with the length unit as run, in voxels, for the mode's refit steps
+    if (s.length_scale == 0 && r.length_scale > 0 && voxel_size > 0) s.length_scale = float(r.length_scale / voxel_size);
+    Json j = Json::object();
+    j.set("resolution", scan.voxel_size > 0 || !r.scan.grid.voxel_size ? 0 : scan.resolution).set("voxel_size", voxel_size)
+        .set("band", scan.half_width).set("shell", scan.shell_thickness).set("repair", o.repair)
+        .set("distance", to_string(o.distance)).set("max_memory", static_cast<unsigned long long>(o.max_memory_bytes))
+        .set("threads", scan.threads);
+    if (o.smoothing) {
+        j.set("mode", to_string(s.mode))
+            .set("iterations", s.iterations > 0 ? s.iterations : default_iterations(s.mode))
+            .set("normal_steps", s.normal_steps > 0 ? s.normal_steps : default_normal_steps(s.mode))
+            .set("length_scale", r.length_scale).set("sigma_spatial", s.sigma_spatial).set("sigma_range", s.sigma_range)
+            .set("tv_lambda", s.tv_lambda).set("mu", s.mu).set("alpha", s.alpha)
+            .set("presmooth", s.conductance_presmooth_steps).set("mu_robust", s.mu_robust).set("normal_dt", s.normal_dt)
+            .set("refit_steps", s.refit_max_steps > 0 ? s.refit_max_steps : default_refit_steps(s)).set("refit_dt", s.refit_dt)
+            .set("refit_tolerance", s.refit_tolerance).set("refit_super_steps", s.refit_super_steps)
+            .set("extend_by_gather", s.extend_by_gather).set("all_samples", !s.thin_samples)
+            .set("preserve_volume", s.preserve_volume).set("second_order", s.second_order_term)
+            .set("active_band", s.active_band);
+    }
+    j.set("connectivity", to_string(o.connectivity)).set("closed", o.closed).set("fit_to_normal_map", o.fit_to_normal_map)
+        .set("projection_steps", o.fit.projection_steps).set("relax_steps", o.fit.relax_steps)
+        .set("fit_steps", o.fit.vertex_steps).set("boundary_rings", o.fit.boundary_rings).set("iso", o.extract.iso)
+        .set("target_faces", o.target_faces).set("max_error", o.max_error).set("decimator", to_string(o.decimator));
+    return j;
+}
+
 }  // namespace normalflow

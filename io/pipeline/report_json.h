@@ -54,4 +54,15 @@ Json to_json(const DecimationReport& r);
 /// seconds {repair, voxelize, smooth, extract, decimate, total}, peak_memory_bytes, warnings.
 Json to_json(const PipelineReport& r);
 
+/// Every parameter of a run of smooth_mesh (or of one of its halves, or of smooth_volume_input): o as given, with what the run resolved
+/// from r where o left it to the run (the automatic resolution (0 for a volume input), the band rule, the length unit in world units, the
+/// mode's iterations, normal steps and refit steps; the memory limit that applied). Keys as the command line's
+/// flags, with '_' for '-': resolution, voxel_size, band, shell, repair, distance, max_memory, threads, mode,
+/// iterations, normal_steps, length_scale, sigma_spatial, sigma_range, tv_lambda, mu, alpha, presmooth,
+/// mu_robust, normal_dt, refit_steps, refit_dt, refit_tolerance, refit_super_steps, extend_by_gather,
+/// all_samples, preserve_volume, second_order, active_band, connectivity, closed, fit_to_normal_map,
+/// projection_steps, relax_steps, fit_steps, boundary_rings, iso, target_faces, max_error, decimator.
+/// voxel_size: the grid's (a scan conversion's, r.scan.grid; a volume input's own).
+Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double voxel_size);
+
 }  // namespace normalflow

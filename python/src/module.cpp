@@ -376,7 +376,8 @@ PYBIND11_MODULE(_normalflow, m) {
             return smooth_mesh(mesh, opt, &progress);
         });
         Json j = to_json(r.report);
-        j.set("mode", to_string(opt.smooth.mode)).set("version", version());
+        j.set("mode", to_string(opt.smooth.mode)).set("parameters", parameters_json(opt, r.report, r.report.scan.grid.voxel_size));
+        j.set("version", version());
         return mesh_and_report(std::move(r.mesh), j);
     }, py::arg("mesh"), py::arg("args"), py::arg("progress"));
 
@@ -391,7 +392,8 @@ PYBIND11_MODULE(_normalflow, m) {
         PyVolume out{in.volume, in.info};
         PipelineResult r = released(progress, [&] { return smooth_volume_input(out.volume, opt, &progress, want_mesh); });
         Json j = to_json(r.report);
-        j.set("mode", to_string(opt.smooth.mode)).set("version", version());
+        j.set("mode", to_string(opt.smooth.mode)).set("parameters", parameters_json(opt, r.report, in.volume.grid.voxel_size));
+        j.set("version", version());
         if (!want_mesh) return py::make_tuple(py::cast(std::move(out)), j.dump());
         return mesh_and_report(std::move(r.mesh), j);
     }, py::arg("volume"), py::arg("args"), py::arg("progress"), py::arg("want_mesh"));
