@@ -1,0 +1,36 @@
+# Writes the man page of the normalflow tool with help2man: the top-level --help and --version, and a COMMANDS
+# section with each subcommand's --help (as the tool prints it, so the page never disagrees with the tool).
+#   cmake -DTOOL=<normalflow> -DHELP2MAN=<help2man> -DOUT=<normalflow.1> -DWORK=<dir> -P make_man.cmake
+execute_process(COMMAND ${TOOL} --help OUTPUT_VARIABLE top RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "make_man: ${TOOL} --help failed")
+endif()
+string(REGEX REPLACE ".*\nSubcommands:\n" "" subs "${top}")
+string(REPLACE "\n" ";" lines "${subs}")
+set(names "")
+foreach(line IN LISTS lines)
+  if(line MATCHES "^  ([a-z]+)  ")
+    list(APPEND names ${CMAKE_MATCH_1})
+  endif()
+endforeach()
+set(h2m "[DESCRIPTION]\nnormalflow smooths, remeshes and compares triangle meshes and volumes through the level sets of a signed\ndistance volume and a normal map filtered on the surface (Tasdizen, Whitaker, Burchard and Osher, ACM TOG 2003).\nRun \\fBnormalflow\\fR \\fICOMMAND\\fR \\fB--help\\fR for a command's flags; they are listed below.\n\n[COMMANDS]\n")
+foreach(n IN LISTS names)
+  execute_process(COMMAND ${TOOL} ${n} --help OUTPUT_VARIABLE help RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "make_man: ${TOOL} ${n} --help failed")
+  endif()
+  string(REPLACE "\\" "\\e" help "${help}")
+  string(REGEX REPLACE "Usage: [^ ]*normalflow" "Usage: normalflow" help "${help}")
+  string(REGEX REPLACE "\n\\." "\n\\\\&." help "${help}")
+  string(APPEND h2m ".SS ${n}\n.nf\n${help}.fi\n")
+endforeach()
+string(APPEND h2m "\n[FILES]\nMeshes: OBJ, PLY, OFF, STL, glTF/GLB, Draco (.drc). Volumes: OpenVDB (.vdb), NRRD (.nrrd, .nhdr), NIfTI\n(.nii, .nii.gz). Every output is written whole or not at all; an existing file is never left half-written.\n\n[EXIT STATUS]\n0 success; 1 other error (batch: a file failed); 3 invalid input; 4 I/O error; 5 numerical error; 6 out of\nmemory; 130 interrupted.\n\n[SEE ALSO]\nThe README and CHANGELOG in /usr/share/doc/normalflow; the Python module (import normalflow).\n")
+file(WRITE ${WORK}/normalflow.h2m "${h2m}")
+execute_process(COMMAND ${HELP2MAN} --no-info --no-discard-stderr
+                        --name "geometric surface processing via normal maps"
+                        --include ${WORK}/normalflow.h2m --output ${OUT}.tmp ${TOOL}
+                RESULT_VARIABLE rc ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "make_man: help2man failed: ${err}")
+endif()
+file(RENAME ${OUT}.tmp ${OUT})
