@@ -58,7 +58,8 @@ void check(const Volume& v) {
 void check(const ScalarImage& img) {
     for (int a = 0; a < 3; ++a)
         if (img.dims[std::size_t(a)] < 1) finding("a reader returned an image with dims < 1");
-    if (img.values.size() != img.sample_count()) finding("a reader returned an image whose values are not dims' product");
+    if (img.values.size() != img.sample_count())
+        finding("a reader returned an image whose values are not dims' product");
     for (const float x : img.values)
         if (!std::isfinite(x)) finding("a reader returned an image with a non-finite value");
     if (!is_finite(img.origin)) finding("a reader returned an image with a non-finite origin");
@@ -103,7 +104,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         read_one(std::string_view(reinterpret_cast<const char*>(data), size));
     } catch (const normalflow::InvalidInput&) {
     } catch (const normalflow::IoError&) {
-    } catch (const normalflow::OutOfMemory&) {
-    }
+    } catch (const normalflow::OutOfMemory&) {}
     return 0;
 }

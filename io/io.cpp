@@ -37,7 +37,7 @@ std::string shown_extension(const std::string& path) {
 }
 
 [[noreturn, maybe_unused]] void no_support(std::string_view who, const std::string& path, std::string_view what,
-                             std::string_view library) {
+                                           std::string_view library) {
     throw InvalidInput(std::string(who) + ": " + path + ": " + std::string(what) + " needs " + std::string(library) +
                        ", and this build has no " + std::string(library) + " support");
 }
@@ -89,11 +89,11 @@ void write_mesh(const std::string& path, const Mesh& m, const WriteOptions& opt)
         case MeshFormat::Stl: return write_stl(path, m, opt);
         case MeshFormat::Glb:
 #if NORMALFLOW_HAS_DRACO
-            if (opt.glb == GlbEncoding::Draco) return write_draco_glb(path, m, opt.draco);  // KHR_draco_mesh_compression
+            if (opt.glb == GlbEncoding::Draco)
+                return write_draco_glb(path, m, opt.draco);  // KHR_draco_mesh_compression
 #endif
             return write_glb(path, m);
-        case MeshFormat::Gltf:
-            throw InvalidInput("write_mesh: " + path + ": writing .gltf is not supported; use .glb");
+        case MeshFormat::Gltf: throw InvalidInput("write_mesh: " + path + ": writing .gltf is not supported; use .glb");
         case MeshFormat::Drc:
 #if NORMALFLOW_HAS_DRACO
             return write_drc(path, m, opt.draco);
@@ -115,7 +115,8 @@ VolumeKind volume_kind(const std::string& path) {
     if (ext == ".vdb") return VolumeKind::Vdb;
     if (ext == ".nrrd" || ext == ".nhdr") return VolumeKind::Nrrd;
     if (ext == ".nii") return VolumeKind::Nifti;
-    if (ext == ".gz" && lower_extension(std::filesystem::path(path).stem().string()) == ".nii") return VolumeKind::Nifti;
+    if (ext == ".gz" && lower_extension(std::filesystem::path(path).stem().string()) == ".nii")
+        return VolumeKind::Nifti;
     return VolumeKind::None;
 }
 
@@ -216,7 +217,8 @@ void write_volume(const std::string& path, const Volume& v, const NormalMap* nor
     const std::string ext = lower_extension(path);
     if (ext == ".nrrd") {
         if (normals)
-            throw InvalidInput("write_volume: " + path + ": the normal map is written as a vector grid of a .vdb file; "
+            throw InvalidInput("write_volume: " + path +
+                               ": the normal map is written as a vector grid of a .vdb file; "
                                "use .vdb");
         return write_nrrd(path, v);
     }

@@ -59,17 +59,17 @@ struct VolumeInput {
     std::optional<double> label;  ///< a label map: the surface of {value == label} (ImageSurface::label)
     /// Flips the inside: with iso, inside is below it; without, the file's signed distance is positive inside.
     bool negate = false;
-    double voxel_size = 0;        ///< > 0: resample to this voxel size (world units); 0: the smallest spacing
+    double voxel_size = 0;  ///< > 0: resample to this voxel size (world units); 0: the smallest spacing
 };
 
 /// What read_volume found and did.
 struct VolumeReadInfo {
-    std::string format;                 ///< "nrrd", "nifti" or "vdb"
-    std::array<int, 3> dims{0, 0, 0};   ///< the file's samples along its axes
+    std::string format;                      ///< "nrrd", "nifti" or "vdb"
+    std::array<int, 3> dims{0, 0, 0};        ///< the file's samples along its axes
     std::array<double, 3> spacing{0, 0, 0};  ///< the file's spacing along its axes, world units
-    std::string surface;                ///< how the values were read: "signed distance", "iso 0.5", "label 3", ...
-    bool resampled = false;             ///< resampled to isotropic voxels (image_to_volume)
-    bool placed = false;                ///< rotated or reflected axes: the grid carries a Placement
+    std::string surface;                     ///< how the values were read: "signed distance", "iso 0.5", "label 3", ...
+    bool resampled = false;                  ///< resampled to isotropic voxels (image_to_volume)
+    bool placed = false;                     ///< rotated or reflected axes: the grid carries a Placement
 };
 
 /// Reads a volume file as a narrow-band signed distance volume, negative inside.

@@ -56,8 +56,9 @@ std::string version_text() {
     }
     t += "this build of the tool: " + strongest;
     t += because.empty() ? " (every library it links is permissive)"
-                         : " (it links " + because + "; -DNORMALFLOW_WITH_TETGEN=OFF -DNORMALFLOW_WITH_CGAL=OFF build an "
-                                                     "Apache-2.0 tool)";
+                         : " (it links " + because +
+                               "; -DNORMALFLOW_WITH_TETGEN=OFF -DNORMALFLOW_WITH_CGAL=OFF build an "
+                               "Apache-2.0 tool)";
     return t;
 }
 

@@ -3,14 +3,14 @@
 #include <unistd.h>
 
 #include <atomic>
-#include <csignal>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <string>
 #include <new>
+#include <string>
 
 #include "core/errors.h"
 
@@ -108,11 +108,16 @@ std::size_t parse_bytes(const std::string& text, const char* option) {
     std::string rest(end ? end : "");
     if (!rest.empty() && (rest.back() == 'B' || rest.back() == 'b')) rest.pop_back();
     double unit = 0;  // 0: not a known suffix
-    if (rest.empty()) unit = 1;
-    else if (rest == "K" || rest == "k") unit = 1024.0;
-    else if (rest == "M" || rest == "m") unit = 1024.0 * 1024;
-    else if (rest == "G" || rest == "g") unit = 1024.0 * 1024 * 1024;
-    else if (rest == "T" || rest == "t") unit = 1024.0 * 1024 * 1024 * 1024;
+    if (rest.empty())
+        unit = 1;
+    else if (rest == "K" || rest == "k")
+        unit = 1024.0;
+    else if (rest == "M" || rest == "m")
+        unit = 1024.0 * 1024;
+    else if (rest == "G" || rest == "g")
+        unit = 1024.0 * 1024 * 1024;
+    else if (rest == "T" || rest == "t")
+        unit = 1024.0 * 1024 * 1024 * 1024;
     if (end == text.c_str() || unit == 0 || !(value > 0) || !std::isfinite(value))
         throw InvalidInput(std::string(option) + ": '" + text + "' is not a size (examples: 4G, 512M, 100000)");
     return static_cast<std::size_t>(value * unit);
@@ -143,9 +148,10 @@ std::string attribute_words(const Mesh& m) {
 }
 
 void add_config_option(CLI::App* cmd) {
-    cmd->add_option("--config", "read flags from a TOML or INI file: one `name = value` per line, names as the long "
-                                "flags (mode = \"isotropic\", target-faces = 20000, repair = false); flags given "
-                                "here win")
+    cmd->add_option("--config",
+                    "read flags from a TOML or INI file: one `name = value` per line, names as the long "
+                    "flags (mode = \"isotropic\", target-faces = 20000, repair = false); flags given "
+                    "here win")
         ->type_name("FILE");
 }
 
@@ -166,7 +172,8 @@ void apply_config_file(CLI::App* cmd) {
     for (const CLI::ConfigItem& item : items) {
         if (item.name == "++" || item.name == "--") continue;  // a section's start and end
         if (!item.parents.empty() && !(item.parents.size() == 1 && item.parents[0] == cmd->get_name()))
-            throw InvalidInput(file + ": [" + item.parents[0] + "]: only the [" + cmd->get_name() + "] section applies here");
+            throw InvalidInput(file + ": [" + item.parents[0] + "]: only the [" + cmd->get_name() +
+                               "] section applies here");
         std::string name = item.name;
         std::vector<std::string> inputs = item.inputs;
         CLI::Option* op = cmd->get_option_no_throw("--" + name);
@@ -175,8 +182,7 @@ void apply_config_file(CLI::App* cmd) {
             name = "no-" + name;
             inputs[0] = inputs[0] == "true" ? "false" : "true";
         }
-        if (!op || op == config)
-            throw InvalidInput(file + ": " + item.name + ": not a flag of " + cmd->get_name());
+        if (!op || op == config) throw InvalidInput(file + ": " + item.name + ": not a flag of " + cmd->get_name());
         if (op->count() > 0) continue;  // given on the command line
         try {
             for (std::string& in : inputs) in = op->get_flag_value(name, in);  // a flag's value (inverted for !--no-x)
@@ -189,9 +195,10 @@ void apply_config_file(CLI::App* cmd) {
 }
 
 CLI::Option* add_decimator_option(CLI::App* cmd, Decimator& target) {
-    const std::map<std::string, Decimator> names = {
-        {"auto", Decimator::Auto}, {"quadric", Decimator::Quadric},
-        {"meshoptimizer", Decimator::Meshoptimizer}, {"cgal", Decimator::Cgal}};
+    const std::map<std::string, Decimator> names = {{"auto", Decimator::Auto},
+                                                    {"quadric", Decimator::Quadric},
+                                                    {"meshoptimizer", Decimator::Meshoptimizer},
+                                                    {"cgal", Decimator::Cgal}};
     return add_enum_option(cmd, "--decimator", target, names,
                            "auto: normalflow's quadric edge collapse, checked (closed, manifold, no "
                            "self-intersections), CGAL's edge collapse where a check fails; quadric: that alone; "

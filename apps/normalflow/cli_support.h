@@ -12,7 +12,7 @@
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/stopwatch.h"
-#include "io/pipeline/pipeline.h"        // Decimator
+#include "io/pipeline/pipeline.h"       // Decimator
 #include "io/pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
 #include "io/util/json.h"
 
@@ -52,7 +52,6 @@ bool interrupted();
 /// \throw InvalidInput naming the option for anything else.
 std::size_t parse_bytes(const std::string& text, const char* option);
 
-
 /// The per-vertex attributes m has, as JSON names ("normals", "colors", "texcoords") and as words for a
 /// text line ("normals, colours, texture coordinates"; "none").
 std::vector<std::string> attribute_names(const Mesh& m);
@@ -60,7 +59,7 @@ std::string attribute_words(const Mesh& m);
 
 /// An exception of normalflow's as an exit status and a one-line message (guarded() prints it after the command).
 struct ErrorStatus {
-    int status;           ///< 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled
+    int status;  ///< 1 other error, 3 invalid input, 4 I/O error, 5 numerical error, 6 out of memory, 130 cancelled
     std::string message;
 };
 ErrorStatus error_status(std::exception_ptr error);
@@ -94,7 +93,10 @@ CLI::Option* add_enum_option(CLI::App* cmd, const std::string& flag, E& target, 
     for (const auto& [name, v] : names) choices += (choices.empty() ? "" : "|") + name;
     CLI::Validator parse = CLI::CheckedTransformer(names);
     parse.description("");
-    return cmd->add_option(flag, target, help)->transform(parse)->type_name(choices)->default_str(name_of(names, target));
+    return cmd->add_option(flag, target, help)
+        ->transform(parse)
+        ->type_name(choices)
+        ->default_str(name_of(names, target));
 }
 
 /// Adds --decimator auto|quadric|meshoptimizer|cgal (what --target-faces runs, decimate_mesh).
@@ -115,16 +117,24 @@ void apply_config_file(CLI::App* cmd);
 template <class Args>
 void on_run(CLI::App* cmd, std::shared_ptr<Args> args, int (*fn)(const Args&)) {
     cmd->final_callback([cmd, args, fn] {
-        struct Ctx { int (*fn)(const Args&); const Args* args; CLI::App* cmd; } ctx{fn, args.get(), cmd};
-        const int status = guarded(cmd->get_name().c_str(),
-                                   [](void* p) {
-                                       auto* c = static_cast<Ctx*>(p);
-                                       apply_config_file(c->cmd);
-                                       if constexpr (requires { c->args->input; c->args->output; })
-                                           refuse_overwriting_input(c->args->input, c->args->output);
-                                       return c->fn(*c->args);
-                                   },
-                                   &ctx);
+        struct Ctx {
+            int (*fn)(const Args&);
+            const Args* args;
+            CLI::App* cmd;
+        } ctx{fn, args.get(), cmd};
+        const int status = guarded(
+            cmd->get_name().c_str(),
+            [](void* p) {
+                auto* c = static_cast<Ctx*>(p);
+                apply_config_file(c->cmd);
+                if constexpr (requires {
+                                  c->args->input;
+                                  c->args->output;
+                              })
+                    refuse_overwriting_input(c->args->input, c->args->output);
+                return c->fn(*c->args);
+            },
+            &ctx);
         throw CLI::RuntimeError(status);
     });
 }

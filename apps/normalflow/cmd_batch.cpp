@@ -10,9 +10,9 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstring>
 #include <atomic>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -54,7 +54,9 @@ struct Job {
     std::string input, output;
 };
 
-bool is_input_path(const std::string& p) { return is_volume_path(p) || mesh_format_from_path(p) != MeshFormat::Unknown; }
+bool is_input_path(const std::string& p) {
+    return is_volume_path(p) || mesh_format_from_path(p) != MeshFormat::Unknown;
+}
 
 /// The file name without its extension (both of .nii.gz).
 std::string stem_of(const fs::path& p) {
@@ -99,8 +101,9 @@ std::vector<Job> plan(const BatchArgs& a) {
         } else {
             // a file that is missing or unreadable fails on its own line; an unknown extension is refused now
             if (!is_input_path(in))
-                throw InvalidInput(in + ": not a mesh or volume file (obj, ply, off, stl, gltf, glb, drc; vdb, nrrd, "
-                                        "nhdr, nii, nii.gz)");
+                throw InvalidInput(in +
+                                   ": not a mesh or volume file (obj, ply, off, stl, gltf, glb, drc; vdb, nrrd, "
+                                   "nhdr, nii, nii.gz)");
             jobs.push_back({in, (out_dir / (stem_of(fs::path(in)) + ext)).lexically_normal().string()});
         }
     }
@@ -150,7 +153,9 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
         result = std::move(r.mesh);
         report = std::move(r.report);
         j.set("parameters", parameters_json(opt, report, report.scan.grid.voxel_size));
-        j.set("input", Json::object().set("format", info.format).set("vertices", mesh.positions.size())
+        j.set("input", Json::object()
+                           .set("format", info.format)
+                           .set("vertices", mesh.positions.size())
                            .set("triangles", mesh.triangles.size()));
     }
     fs::create_directories(fs::path(job.output).parent_path());
@@ -205,7 +210,8 @@ int run_batch(const BatchArgs& a) {
             if (interrupted()) return;
             std::error_code ec;
             if (!a.overwrite && fs::exists(job.output, ec)) {
-                report_line(job, "skipped", line(job, "skipped", 0).set("reason", "the output exists"), " (the output exists)");
+                report_line(job, "skipped", line(job, "skipped", 0).set("reason", "the output exists"),
+                            " (the output exists)");
                 continue;
             }
             Stopwatch clock;
@@ -237,9 +243,15 @@ int run_batch(const BatchArgs& a) {
     const bool stopped = interrupted() && done < jobs.size();
     if (a.out.json) {
         Json s = Json::object();
-        s.set("files", jobs.size()).set("ok", ok).set("skipped", skipped).set("failed", failed)
-            .set("not_run", jobs.size() - done).set("interrupted", stopped).set("jobs", workers)
-            .set("seconds", total.seconds()).set("version", version());
+        s.set("files", jobs.size())
+            .set("ok", ok)
+            .set("skipped", skipped)
+            .set("failed", failed)
+            .set("not_run", jobs.size() - done)
+            .set("interrupted", stopped)
+            .set("jobs", workers)
+            .set("seconds", total.seconds())
+            .set("version", version());
         std::printf("%s\n", Json::object().set("summary", s).dump().c_str());
     } else if (!a.out.quiet) {
         std::printf("batch: %zu files: %zu done, %zu skipped (output exists), %zu failed%s, %.1f s\n", jobs.size(), ok,
@@ -254,16 +266,19 @@ int run_batch(const BatchArgs& a) {
 void add_batch_command(CLI::App& app) {
     auto a = std::make_shared<BatchArgs>();
     auto* cmd = app.add_subcommand(
-        "batch", "smooth many files (as `smooth`, the same flags): one JSON line per file with --json, a failure "
-                 "kept to its file, outputs that exist skipped (resumable), several files at once (--jobs)");
+        "batch",
+        "smooth many files (as `smooth`, the same flags): one JSON line per file with --json, a failure "
+        "kept to its file, outputs that exist skipped (resumable), several files at once (--jobs)");
     cmd->add_option("IN", a->inputs, "mesh or volume files, and folders of them");
     cmd->add_option("--list", a->list, "a file naming one input per line (# starts a comment)");
-    cmd->add_option("-o,--output-dir", a->output_dir, "where the results go, as NAME.FORMAT (mirroring folders)")->required();
+    cmd->add_option("-o,--output-dir", a->output_dir, "where the results go, as NAME.FORMAT (mirroring folders)")
+        ->required();
     cmd->add_option("--format", a->format, "output format: ply, obj, off, stl, glb, drc")->capture_default_str();
     cmd->add_flag("-r,--recursive", a->recursive, "take the files of folders' subfolders too");
     cmd->add_flag("--overwrite", a->overwrite, "redo files whose output exists (default: skip them)");
     cmd->add_option("-j,--jobs", a->jobs, "files at once (each uses the threads; results do not depend on it)")
-        ->check(CLI::Range(1u, 1024u))->capture_default_str();
+        ->check(CLI::Range(1u, 1024u))
+        ->capture_default_str();
     add_grid_options(cmd, a->pipeline);
     add_volume_input_options(cmd, a->volume, /*voxel_size=*/false);
     add_smooth_options(cmd, a->pipeline);

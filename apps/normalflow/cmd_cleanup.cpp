@@ -72,11 +72,11 @@ int run_cleanup(const CleanupArgs& a) {
         j.set("command", "cleanup").set("input", a.input).set("output", a.output);
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {
-        std::printf("cleanup: %s -> %s: %zu -> %zu faces, Hausdorff %.6g, %s, %s, %zu self-intersections (%zu before "
-                    "repair) (%.2f s)\n",
-                    a.input.c_str(), a.output.c_str(), r.faces_before, r.faces_after, r.hausdorff,
-                    r.closed ? "closed" : "OPEN", r.manifold ? "manifold" : "NON-MANIFOLD", r.self_intersections,
-                    r.self_intersections_found, r.seconds);
+        std::printf(
+            "cleanup: %s -> %s: %zu -> %zu faces, Hausdorff %.6g, %s, %s, %zu self-intersections (%zu before "
+            "repair) (%.2f s)\n",
+            a.input.c_str(), a.output.c_str(), r.faces_before, r.faces_after, r.hausdorff, r.closed ? "closed" : "OPEN",
+            r.manifold ? "manifold" : "NON-MANIFOLD", r.self_intersections, r.self_intersections_found, r.seconds);
         for (const auto& w : r.warnings) std::fprintf(stderr, "cleanup: warning: %s\n", w.c_str());
     }
     return 0;
@@ -102,7 +102,8 @@ void add_cleanup_command(CLI::App& app) {
     cmd->add_option("--edge-length", o.target_edge_length, "isotropic remeshing to edge length L (world units)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--min-component", o.min_component_fraction, "drop components below this fraction of the faces")
-        ->check(CLI::Range(0.0, 0.999999))->capture_default_str();
+        ->check(CLI::Range(0.0, 0.999999))
+        ->capture_default_str();
     cmd->add_flag("!--no-repair", o.repair_self_intersections,
                   "do not repair self-intersecting faces (only report them)");
     add_output_flags(cmd, a->out);

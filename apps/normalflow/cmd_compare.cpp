@@ -26,11 +26,11 @@ namespace {
 struct CompareArgs {
     std::string reference;
     std::vector<std::string> candidates;
-    std::string report_dir;               ///< where compare.md/.csv/.json go (none if empty)
+    std::string report_dir;  ///< where compare.md/.csv/.json go (none if empty)
     CompareOptions options;
-    bool self_intersections = true;       ///< count intersecting triangle pairs (CGAL builds)
-    bool pictures = true;                 ///< with --report: PNG pictures and index.html
-    int picture_size = 400;               ///< pixels, width and height of each picture
+    bool self_intersections = true;  ///< count intersecting triangle pairs (CGAL builds)
+    bool pictures = true;            ///< with --report: PNG pictures and index.html
+    int picture_size = 400;          ///< pixels, width and height of each picture
     OutputFlags out;
 };
 
@@ -52,8 +52,8 @@ int run_compare(const CompareArgs& a) {
         if (a.options.correspondence) {  // refused here, with the file names, before anything is measured
             const std::string mismatch = correspondence_mismatch(cand, reference);
             if (!mismatch.empty())
-                throw InvalidInput("--correspondence: candidate " + a.candidates[i] + " vs reference " +
-                                   a.reference + ": " + mismatch);
+                throw InvalidInput("--correspondence: candidate " + a.candidates[i] + " vs reference " + a.reference +
+                                   ": " + mismatch);
         }
         r.comparison = compare_meshes(cand, reference, a.options);
 #ifdef NORMALFLOW_HAS_CGAL
@@ -90,19 +90,23 @@ int run_compare(const CompareArgs& a) {
 
 void add_compare_command(CLI::App& app) {
     auto args = std::make_shared<CompareArgs>();
-    auto* cmd = app.add_subcommand("compare", "compare candidate meshes with a reference (no vertex correspondence needed)");
+    auto* cmd =
+        app.add_subcommand("compare", "compare candidate meshes with a reference (no vertex correspondence needed)");
     cmd->add_option("REFERENCE", args->reference, "reference mesh (ground truth or input)")->required();
     cmd->add_option("CANDIDATE", args->candidates, "one or more candidate meshes")->required();
     cmd->add_option("--report", args->report_dir,
                     "write compare.md, compare.csv, compare.json, index.html and pictures/ into this folder");
     cmd->add_option("--samples", args->options.sampling.samples, "surface samples per mesh")
-        ->check(CLI::PositiveNumber)->capture_default_str();
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--seed", args->options.sampling.seed, "sampling seed")->capture_default_str();
     cmd->add_option("--crease-angle", args->options.crease.angle_deg, "feature-edge dihedral threshold, degrees")
-        ->check(CLI::Range(0.001, 179.999))->capture_default_str();
+        ->check(CLI::Range(0.001, 179.999))
+        ->capture_default_str();
     cmd->add_option("--crease-radius", args->options.crease.radius_relative,
                     "crease neighbourhood radius, fraction of the reference bbox diagonal")
-        ->check(CLI::PositiveNumber)->capture_default_str();
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_flag("--correspondence", args->options.correspondence,
                   "also face-by-face normal angle and vertex-by-vertex distance; the candidates must have the "
                   "reference's vertex count and triangles, in order (e.g. a mesh-side smoothing of the noisy "
@@ -110,7 +114,8 @@ void add_compare_command(CLI::App& app) {
     cmd->add_flag("!--no-self-intersections", args->self_intersections, "skip counting self-intersections (CGAL)");
     cmd->add_flag("!--no-pictures", args->pictures, "with --report: skip the PNG pictures and index.html");
     cmd->add_option("--picture-size", args->picture_size, "with --report: picture width and height, pixels")
-        ->check(CLI::Range(32, 4096))->capture_default_str();
+        ->check(CLI::Range(32, 4096))
+        ->capture_default_str();
     add_output_flags(cmd, args->out);
     on_run(cmd, args, run_compare);
 }

@@ -37,20 +37,27 @@ int run_compress(const CompressArgs& a) {
                             m.texcoords.size() * 8 + m.triangles.size() * 12;
     if (a.out.json) {
         Json j = Json::object();
-        j.set("command", "compress").set("input", a.input).set("output", a.output)
-            .set("vertices", m.positions.size()).set("triangles", m.triangles.size())
-            .set("bytes_before", static_cast<std::size_t>(in_bytes)).set("bytes_raw", raw)
+        j.set("command", "compress")
+            .set("input", a.input)
+            .set("output", a.output)
+            .set("vertices", m.positions.size())
+            .set("triangles", m.triangles.size())
+            .set("bytes_before", static_cast<std::size_t>(in_bytes))
+            .set("bytes_raw", raw)
             .set("bytes_after", static_cast<std::size_t>(out_bytes))
-            .set("attributes", Json::array(attribute_names(m))).set("position_bits", a.draco.position_bits)
-            .set("normal_bits", a.draco.normal_bits).set("texcoord_bits", a.draco.texcoord_bits)
+            .set("attributes", Json::array(attribute_names(m)))
+            .set("position_bits", a.draco.position_bits)
+            .set("normal_bits", a.draco.normal_bits)
+            .set("texcoord_bits", a.draco.texcoord_bits)
             .set("compression_level", a.draco.compression_level)
-            .set("seconds_read", t_read).set("seconds_compress", t_write);
+            .set("seconds_read", t_read)
+            .set("seconds_compress", t_write);
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {
-        std::printf("compress: %s (%zu bytes) -> %s (%zu bytes, %.1fx; raw %zu bytes%s%s) in %.3f s\n",
-                    a.input.c_str(), static_cast<std::size_t>(in_bytes), a.output.c_str(),
-                    static_cast<std::size_t>(out_bytes), out_bytes ? double(in_bytes) / double(out_bytes) : 0.0, raw,
-                    m.has_attributes() ? "; with " : "", m.has_attributes() ? attribute_words(m).c_str() : "", t_write);
+        std::printf("compress: %s (%zu bytes) -> %s (%zu bytes, %.1fx; raw %zu bytes%s%s) in %.3f s\n", a.input.c_str(),
+                    static_cast<std::size_t>(in_bytes), a.output.c_str(), static_cast<std::size_t>(out_bytes),
+                    out_bytes ? double(in_bytes) / double(out_bytes) : 0.0, raw, m.has_attributes() ? "; with " : "",
+                    m.has_attributes() ? attribute_words(m).c_str() : "", t_write);
     }
     return 0;
 }
@@ -59,13 +66,17 @@ int run_compress(const CompressArgs& a) {
 
 void add_draco_options(CLI::App* cmd, DracoOptions& d) {
     cmd->add_option("--position-bits", d.position_bits, "quantization bits per position axis")
-        ->check(CLI::Range(1, 30))->capture_default_str();
+        ->check(CLI::Range(1, 30))
+        ->capture_default_str();
     cmd->add_option("--normal-bits", d.normal_bits, "quantization bits per normal component")
-        ->check(CLI::Range(1, 30))->capture_default_str();
+        ->check(CLI::Range(1, 30))
+        ->capture_default_str();
     cmd->add_option("--texcoord-bits", d.texcoord_bits, "quantization bits per texture coordinate component")
-        ->check(CLI::Range(1, 30))->capture_default_str();
+        ->check(CLI::Range(1, 30))
+        ->capture_default_str();
     cmd->add_option("--level", d.compression_level, "compression level 0 (fast) .. 10 (small)")
-        ->check(CLI::Range(0, 10))->capture_default_str();
+        ->check(CLI::Range(0, 10))
+        ->capture_default_str();
     cmd->add_flag("--fallback", d.fallback, ".glb: also store uncompressed buffers for viewers without Draco");
 }
 

@@ -45,7 +45,8 @@ int run_convert(const ConvertArgs& a) {
     write_mesh(a.output, m, WriteOptions{!a.ascii});
     j.set("output", a.output).set("vertices", m.positions.size()).set("triangles", m.triangles.size());
     j.set("seconds", clock.seconds());
-    if (a.out.json) std::printf("%s\n", j.dump().c_str());
+    if (a.out.json)
+        std::printf("%s\n", j.dump().c_str());
     else if (!a.out.quiet)
         std::printf("convert: %s -> %s (%zu vertices, %zu triangles)\n", a.input.c_str(), a.output.c_str(),
                     m.positions.size(), m.triangles.size());

@@ -104,8 +104,7 @@ void add_info_command(CLI::App& app) {
     auto args = std::make_shared<InfoArgs>();
     auto* cmd = app.add_subcommand("info", "report what a mesh file holds: counts, defects, topology");
     cmd->add_option("IN", args->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
-    cmd->add_flag("--self-intersections", args->self_intersections,
-                  "also count intersecting triangle pairs (slower)");
+    cmd->add_flag("--self-intersections", args->self_intersections, "also count intersecting triangle pairs (slower)");
     cmd->add_flag("--repair", args->repair,
                   "repair first (merge duplicate points, remove degenerate and duplicate faces, orient) and "
                   "report the repaired mesh");

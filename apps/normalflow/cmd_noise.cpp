@@ -18,7 +18,8 @@ struct NoiseArgs {
     OutputFlags out;
 };
 
-const std::map<std::string, NoiseKind> kKinds = {{"gaussian", NoiseKind::Gaussian}, {"impulsive", NoiseKind::Impulsive}};
+const std::map<std::string, NoiseKind> kKinds = {{"gaussian", NoiseKind::Gaussian},
+                                                 {"impulsive", NoiseKind::Impulsive}};
 const std::map<std::string, NoiseDirection> kDirections = {{"normal", NoiseDirection::Normal},
                                                            {"random", NoiseDirection::Random}};
 
@@ -49,16 +50,19 @@ int run_noise(const NoiseArgs& a) {
 
 void add_noise_command(CLI::App& app) {
     auto args = std::make_shared<NoiseArgs>();
-    auto* cmd = app.add_subcommand("noise", "add synthetic noise (sigma in mean edge lengths), deterministic for a seed");
+    auto* cmd =
+        app.add_subcommand("noise", "add synthetic noise (sigma in mean edge lengths), deterministic for a seed");
     cmd->add_option("IN", args->input, "input mesh")->required();
     cmd->add_option("OUT", args->output, "output mesh (format from the extension)")->required();
     cmd->add_option("--sigma", args->noise.sigma, "standard deviation, multiple of the mean edge length")
-        ->required()->check(CLI::NonNegativeNumber);
+        ->required()
+        ->check(CLI::NonNegativeNumber);
     cmd->add_option("--seed", args->noise.seed, "random seed")->capture_default_str();
     add_enum_option(cmd, "--kind", args->noise.kind, kKinds, "gaussian or impulsive");
     add_enum_option(cmd, "--direction", args->noise.direction, kDirections, "normal or random");
     cmd->add_option("--fraction", args->noise.impulsive_fraction, "fraction of vertices displaced by impulsive noise")
-        ->check(CLI::Range(0.0, 1.0))->capture_default_str();
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
     add_output_flags(cmd, args->out);
     on_run(cmd, args, run_noise);
 }

@@ -8,13 +8,13 @@
 #include <string>
 
 #include "commands.h"
-#include "pipeline_options.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "core/version.h"
 #include "io/io.h"
 #include "io/pipeline/pipeline.h"
 #include "io/pipeline/report_json.h"
+#include "pipeline_options.h"
 
 namespace normalflow::cli {
 
@@ -36,22 +36,26 @@ struct ExtractArgs {
 struct SmoothArgs {
     std::string input, output;
     PipelineOptions pipeline;
-    VolumeInput volume;                ///< how a dense volume file's values are read (a volume input)
-    bool normal_map = false;           ///< a .vdb output also holds the filtered normal map
-    DracoOptions draco;                ///< quantization and level for .drc / .glb outputs
+    VolumeInput volume;       ///< how a dense volume file's values are read (a volume input)
+    bool normal_map = false;  ///< a .vdb output also holds the filtered normal map
+    DracoOptions draco;       ///< quantization and level for .drc / .glb outputs
     OutputFlags out;
 };
 
 /// The "input" object of a volume file.
 Json volume_input_json(const std::string& file, const VolumeReadInfo& info, const Volume& v) {
     Json in = Json::object();
-    in.set("file", file).set("format", info.format)
+    in.set("file", file)
+        .set("format", info.format)
         .set("dims", Json::array(std::vector<int>(info.dims.begin(), info.dims.end())))
         .set("spacing", Json::array(std::vector<double>(info.spacing.begin(), info.spacing.end())))
-        .set("surface", info.surface).set("resampled", info.resampled).set("placed", info.placed);
+        .set("surface", info.surface)
+        .set("resampled", info.resampled)
+        .set("placed", info.placed);
     Json grid = Json::object();
     grid.set("dims", Json::array(std::vector<int>(v.grid.dims.begin(), v.grid.dims.end())))
-        .set("voxel_size", v.grid.voxel_size).set("blocks", v.block_count());
+        .set("voxel_size", v.grid.voxel_size)
+        .set("blocks", v.block_count());
     in.set("grid", grid);
     return in;
 }
@@ -85,11 +89,15 @@ auto naming(const std::string& file, F&& f) {
 /// The "input" object: the file as read, and what the repair did (as before the library's report).
 Json input_json(const std::string& file, const ReadInfo& info, const Mesh& mesh, const PipelineReport& r) {
     Json in = Json::object();
-    in.set("file", file).set("format", info.format).set("vertices", mesh.positions.size())
+    in.set("file", file)
+        .set("format", info.format)
+        .set("vertices", mesh.positions.size())
         .set("triangles", mesh.triangles.size());
     if (r.repaired)
-        in.set("points_merged", r.repair.points_merged).set("degenerate_removed", r.repair.degenerate_removed)
-            .set("duplicates_removed", r.repair.duplicates_removed).set("faces_reversed", r.repair.faces_reversed);
+        in.set("points_merged", r.repair.points_merged)
+            .set("degenerate_removed", r.repair.degenerate_removed)
+            .set("duplicates_removed", r.repair.duplicates_removed)
+            .set("faces_reversed", r.repair.faces_reversed);
     return in;
 }
 
@@ -152,8 +160,9 @@ int run_voxelize(const VoxelizeArgs& a) {
     j["seconds"].set("write", clock.seconds());
     j.set("output", Json::object().set("file", a.output));
     finish(j, a.out, total, progress);
-    progress.note("voxelize: " + a.output + " (" + std::to_string(v.grid.dims[0]) + "x" + std::to_string(v.grid.dims[1]) +
-                  "x" + std::to_string(v.grid.dims[2]) + " grid, " + std::to_string(v.block_count()) + " blocks)");
+    progress.note("voxelize: " + a.output + " (" + std::to_string(v.grid.dims[0]) + "x" +
+                  std::to_string(v.grid.dims[1]) + "x" + std::to_string(v.grid.dims[2]) + " grid, " +
+                  std::to_string(v.block_count()) + " blocks)");
     return 0;
 }
 
@@ -171,7 +180,8 @@ int run_extract(const ExtractArgs& a) {
     Json j = Json::object();
     j.set("command", "extract").set("extract", to_json(r.extract));
     if (r.decimated) j.set("decimate", to_json(r.decimate));
-    j.set("seconds", Json::object().set("read", t_read).set("extract", r.seconds.extract).set("decimate", r.seconds.decimate));
+    j.set("seconds",
+          Json::object().set("read", t_read).set("extract", r.seconds.extract).set("decimate", r.seconds.decimate));
     j.set("warnings", Json::array(r.warnings));
     write_result(a.output, m, progress, j);
     finish(j, a.out, total, progress);
@@ -184,8 +194,9 @@ int run_extract(const ExtractArgs& a) {
 int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out, const Stopwatch& total,
                       TerminalProgress& progress) {
     if (opt.scan.resolution != 0)
-        throw InvalidInput("smooth: " + a.input +
-                           ": --resolution applies to a mesh input; a volume keeps its grid (--voxel-size resamples it)");
+        throw InvalidInput(
+            "smooth: " + a.input +
+            ": --resolution applies to a mesh input; a volume keeps its grid (--voxel-size resamples it)");
     VolumeInput vin = a.volume;
     vin.voxel_size = opt.scan.voxel_size;
     opt.scan.voxel_size = 0;
@@ -198,12 +209,14 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     // The length unit: the file's coarsest spacing (smooth_volume_input's default, the grid's voxels, is the same
     // for isotropic files).
     set_volume_length_scale(opt, info);
-    const PipelineResult result =
-        naming(a.input, [&] { return smooth_volume_input(v, opt, &progress, /*want_mesh=*/!volume_out,
-                                                         a.normal_map ? &normals : nullptr); });
+    const PipelineResult result = naming(a.input, [&] {
+        return smooth_volume_input(v, opt, &progress, /*want_mesh=*/!volume_out, a.normal_map ? &normals : nullptr);
+    });
     const PipelineReport& r = result.report;
     Json j = Json::object();
-    j.set("command", "smooth").set("mode", to_string(opt.smooth.mode)).set("input", volume_input_json(a.input, info, v));
+    j.set("command", "smooth")
+        .set("mode", to_string(opt.smooth.mode))
+        .set("input", volume_input_json(a.input, info, v));
     j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
     j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
     if (!volume_out) j.set("extract", to_json(r.extract));
@@ -235,8 +248,9 @@ int run_smooth(const SmoothArgs& a) {
     // Fail on a bad output path before the long computation.
     const bool volume_out = is_volume_output_path(a.output);
     if (!volume_out && mesh_format_from_path(a.output) == MeshFormat::Unknown)
-        throw InvalidInput("smooth: " + a.output +
-                           ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc; .vdb or .nrrd for the volume)");
+        throw InvalidInput(
+            "smooth: " + a.output +
+            ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc; .vdb or .nrrd for the volume)");
     if (a.normal_map && !is_vdb_path(a.output))
         throw InvalidInput("smooth: " + a.output + ": --normal-map is written into a .vdb output");
     if (is_volume_path(a.input)) return run_smooth_volume(a, opt, volume_out, total, progress);
@@ -272,10 +286,10 @@ int run_smooth(const SmoothArgs& a) {
     j["seconds"].set("extract", r.seconds.extract);
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
     if (r.smooth.stopped_unchanged)
-        progress.note("smooth: stopped after main iteration " + std::to_string(r.smooth.iterations_run()) + " of " +
-                      std::to_string(opt.smooth.iterations > 0 ? opt.smooth.iterations
-                                                               : default_iterations(opt.smooth.mode)) +
-                      ": its refit kept no step, so the surface no longer changes");
+        progress.note(
+            "smooth: stopped after main iteration " + std::to_string(r.smooth.iterations_run()) + " of " +
+            std::to_string(opt.smooth.iterations > 0 ? opt.smooth.iterations : default_iterations(opt.smooth.mode)) +
+            ": its refit kept no step, so the surface no longer changes");
     if (r.smooth.stopped_smooth)
         progress.note("smooth: stopped after main iteration " + std::to_string(r.smooth.iterations_run()) +
                       ": the filtered normal map is smooth at the filter's scale");
@@ -296,7 +310,8 @@ void add_voxelize_command(CLI::App& app) {
     cmd->add_option("OUT", a->output, "volume file (.vdb or .nrrd)")->required();
     add_grid_options(cmd, a->pipeline);
     cmd->add_option("--band", a->pipeline.scan.half_width, "band half-width in voxels")
-        ->check(CLI::Range(1.0, 64.0))->capture_default_str();
+        ->check(CLI::Range(1.0, 64.0))
+        ->capture_default_str();
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_voxelize);
 }
@@ -318,7 +333,8 @@ void add_smooth_command(CLI::App& app) {
     cmd->add_option("IN", a->input,
                     "mesh file (obj, ply, off, stl, gltf, glb, drc) or volume file (vdb, nrrd, nhdr, nii, nii.gz)")
         ->required();
-    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc) or volume file (vdb, nrrd)")->required();
+    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc) or volume file (vdb, nrrd)")
+        ->required();
     add_grid_options(cmd, a->pipeline);
     add_volume_input_options(cmd, a->volume, /*voxel_size=*/false);
     add_smooth_options(cmd, a->pipeline);

@@ -20,7 +20,7 @@ struct BaselineArgs {
     TaubinOptions taubin;
     LaplacianOptions laplacian;
     BilateralNormalOptions bilateral;
-    std::string command;            ///< taubin | laplacian | bilateral
+    std::string command;  ///< taubin | laplacian | bilateral
     OutputFlags out;
 };
 
@@ -87,7 +87,9 @@ void add_taubin_command(CLI::App& app) {
                            o.fix_boundary);
     cmd->add_option("--lambda", o.lambda, "shrinking factor, (0, 1]")->capture_default_str();
     cmd->add_option("--mu", o.mu, "inflating factor, -1.5 <= mu <= -lambda")->capture_default_str();
-    cmd->add_option("--iterations", o.iterations, "lambda|mu pairs")->check(CLI::NonNegativeNumber)->capture_default_str();
+    cmd->add_option("--iterations", o.iterations, "lambda|mu pairs")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     add_enum_option(cmd, "--weights", o.weights, kWeights, "uniform or cotan");
     on_run(cmd, args, run_baseline);
 }
@@ -95,8 +97,8 @@ void add_taubin_command(CLI::App& app) {
 void add_laplacian_command(CLI::App& app) {
     auto args = std::make_shared<BaselineArgs>();
     LaplacianOptions& o = args->laplacian;
-    auto* cmd = add_common(app, "laplacian", "plain Laplacian smoothing of the mesh (shrinks), baseline", args,
-                           o.fix_boundary);
+    auto* cmd =
+        add_common(app, "laplacian", "plain Laplacian smoothing of the mesh (shrinks), baseline", args, o.fix_boundary);
     cmd->add_option("--lambda", o.lambda, "step factor, (0, 1]")->capture_default_str();
     cmd->add_option("--iterations", o.iterations, "steps")->check(CLI::NonNegativeNumber)->capture_default_str();
     add_enum_option(cmd, "--weights", o.weights, kWeights, "uniform or cotan");
@@ -106,14 +108,18 @@ void add_laplacian_command(CLI::App& app) {
 void add_bilateral_command(CLI::App& app) {
     auto args = std::make_shared<BaselineArgs>();
     BilateralNormalOptions& o = args->bilateral;
-    auto* cmd = add_common(app, "bilateral", "bilateral normal filtering (Zheng et al. 2011), baseline", args,
-                           o.fix_boundary);
+    auto* cmd =
+        add_common(app, "bilateral", "bilateral normal filtering (Zheng et al. 2011), baseline", args, o.fix_boundary);
     cmd->add_option("--iterations", o.normal_iterations, "normal filtering passes")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--vertex-iterations", o.vertex_iterations, "vertex update passes")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
-    cmd->add_option("--sigma-spatial", o.sigma_spatial, "spatial Gaussian width, world units (0: mean centroid distance)")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
+    cmd->add_option("--sigma-spatial", o.sigma_spatial,
+                    "spatial Gaussian width, world units (0: mean centroid distance)")
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--sigma-range", o.sigma_range, "normal-difference Gaussian width, (0, 2]")->capture_default_str();
     on_run(cmd, args, run_baseline);
 }

@@ -31,16 +31,23 @@ int run_tetmesh(const TetmeshArgs& a) {
     write_tetmesh(a.output, t);
     if (a.out.json) {
         Json j = Json::object();
-        j.set("command", "tetmesh").set("input", a.input).set("output", a.output)
-            .set("tetrahedra", r.tetrahedra).set("points", r.points).set("min_dihedral_deg", r.min_dihedral_deg)
-            .set("volume", r.volume).set("surface_volume", r.surface_volume).set("seconds", r.seconds)
+        j.set("command", "tetmesh")
+            .set("input", a.input)
+            .set("output", a.output)
+            .set("tetrahedra", r.tetrahedra)
+            .set("points", r.points)
+            .set("min_dihedral_deg", r.min_dihedral_deg)
+            .set("volume", r.volume)
+            .set("surface_volume", r.surface_volume)
+            .set("seconds", r.seconds)
             .set("switches", r.switches);
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {
-        std::printf("tetmesh: %s -> %s: %zu tetrahedra, %zu points, min dihedral %.2f deg, volume %.6g "
-                    "(surface encloses %.6g) in %.2f s (TetGen -%s)\n",
-                    a.input.c_str(), a.output.c_str(), r.tetrahedra, r.points, r.min_dihedral_deg, r.volume,
-                    r.surface_volume, r.seconds, r.switches.c_str());
+        std::printf(
+            "tetmesh: %s -> %s: %zu tetrahedra, %zu points, min dihedral %.2f deg, volume %.6g "
+            "(surface encloses %.6g) in %.2f s (TetGen -%s)\n",
+            a.input.c_str(), a.output.c_str(), r.tetrahedra, r.points, r.min_dihedral_deg, r.volume, r.surface_volume,
+            r.seconds, r.switches.c_str());
     }
     return 0;
 #else

@@ -8,20 +8,20 @@
 
 namespace normalflow::cli {
 
-void add_info_command(CLI::App& app);      // cmd_info.cpp
-void add_voxelize_command(CLI::App& app);  // cmd_pipeline.cpp
-void add_extract_command(CLI::App& app);   // cmd_pipeline.cpp
-void add_smooth_command(CLI::App& app);    // cmd_pipeline.cpp
-void add_batch_command(CLI::App& app);     // cmd_batch.cpp
-void add_convert_command(CLI::App& app);   // cmd_convert.cpp
+void add_info_command(CLI::App& app);       // cmd_info.cpp
+void add_voxelize_command(CLI::App& app);   // cmd_pipeline.cpp
+void add_extract_command(CLI::App& app);    // cmd_pipeline.cpp
+void add_smooth_command(CLI::App& app);     // cmd_pipeline.cpp
+void add_batch_command(CLI::App& app);      // cmd_batch.cpp
+void add_convert_command(CLI::App& app);    // cmd_convert.cpp
 void add_taubin_command(CLI::App& app);     // cmd_taubin.cpp
 void add_laplacian_command(CLI::App& app);  // cmd_taubin.cpp
 void add_bilateral_command(CLI::App& app);  // cmd_taubin.cpp
 void add_noise_command(CLI::App& app);      // cmd_noise.cpp
 void add_compare_command(CLI::App& app);    // cmd_compare.cpp
-void add_compress_command(CLI::App& app);  // cmd_compress.cpp
-void add_cleanup_command(CLI::App& app);   // cmd_cleanup.cpp
-void add_tetmesh_command(CLI::App& app);   // cmd_tetmesh.cpp
+void add_compress_command(CLI::App& app);   // cmd_compress.cpp
+void add_cleanup_command(CLI::App& app);    // cmd_cleanup.cpp
+void add_tetmesh_command(CLI::App& app);    // cmd_tetmesh.cpp
 
 /// --position-bits, --normal-bits, --level, --fallback (compress and smooth share them).
 void add_draco_options(CLI::App* cmd, DracoOptions& d);  // cmd_compress.cpp

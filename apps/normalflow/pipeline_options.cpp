@@ -19,7 +19,8 @@ void add_grid_options(CLI::App* cmd, PipelineOptions& p) {
                                     : "voxels along the longest bounding-box side")
                     ->check(CLI::Range(8, 8192));
     if (p.scan.resolution != 0) res->capture_default_str();
-    cmd->add_option("--voxel-size", p.scan.voxel_size, "voxel size in world units (overrides --resolution; a volume input is resampled to it)")
+    cmd->add_option("--voxel-size", p.scan.voxel_size,
+                    "voxel size in world units (overrides --resolution; a volume input is resampled to it)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--shell", p.scan.shell_thickness,
                     "process an open sheet as a shell of this thickness (world units)")
@@ -62,10 +63,12 @@ void add_volume_input_options(CLI::App* cmd, VolumeInput& v, bool voxel_size) {
 void add_smooth_options(CLI::App* cmd, PipelineOptions& p) {
     SmoothOptions& s = p.smooth;
     std::map<std::string, SmoothMode> modes;
-    for (SmoothMode m : {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature,
-                         SmoothMode::Bilateral, SmoothMode::Guided, SmoothMode::TotalVariation})
+    for (SmoothMode m :
+         {SmoothMode::Isotropic, SmoothMode::Anisotropic, SmoothMode::HighBoost, SmoothMode::MeanCurvature,
+          SmoothMode::Bilateral, SmoothMode::Guided, SmoothMode::TotalVariation})
         modes[to_string(m)] = m;
-    add_enum_option(cmd, "--mode", s.mode, modes, "bilateral | guided | tv | anisotropic | isotropic | highboost | mcf");
+    add_enum_option(cmd, "--mode", s.mode, modes,
+                    "bilateral | guided | tv | anisotropic | isotropic | highboost | mcf");
     cmd->add_option("--iterations", s.iterations,
                     "main iterations (normal loop + refit); default: " +
                         std::to_string(default_iterations(SmoothMode::Anisotropic)) + " for anisotropic, " +
@@ -78,39 +81,54 @@ void add_smooth_options(CLI::App* cmd, PipelineOptions& p) {
                         std::to_string(default_normal_steps(SmoothMode::Bilateral)) + " for bilateral and guided, " +
                         std::to_string(default_normal_steps(SmoothMode::TotalVariation)) + " for tv")
         ->check(CLI::Range(1, 10000));
-    cmd->add_option("--length-scale", p.length_scale,
-                    "bilateral, guided, tv: the model's length unit in world units (default: the input's median edge length)")
+    cmd->add_option(
+           "--length-scale", p.length_scale,
+           "bilateral, guided, tv: the model's length unit in world units (default: the input's median edge length)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--sigma-spatial", s.sigma_spatial, "bilateral, guided: spatial sigma in length units")
-        ->check(CLI::PositiveNumber)->capture_default_str();
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--sigma-range", s.sigma_range, "bilateral, guided: range sigma on the normals' chord")
-        ->check(CLI::PositiveNumber)->capture_default_str();
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--tv-lambda", s.tv_lambda,
                     "tv: the fidelity's length in length units (larger: flatter, removes larger patches)")
-        ->check(CLI::PositiveNumber)->capture_default_str();
-    cmd->add_option("--mu", s.mu, "anisotropic conductance scale, 1/voxel")->check(CLI::PositiveNumber)->capture_default_str();
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
+    cmd->add_option("--mu", s.mu, "anisotropic conductance scale, 1/voxel")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_option("--alpha", s.alpha, "high-boost amount")->check(CLI::NonNegativeNumber)->capture_default_str();
     cmd->add_option("--presmooth", s.conductance_presmooth_steps,
                     "anisotropic: isotropic steps that regularise the conductance (0: the paper's raw g)")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--mu-robust", s.mu_robust,
                     "anisotropic: raise mu to C times the robust noise scale of the curvature (0: the fixed mu)")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--refit-steps", s.refit_max_steps,
-                    "refit steps per main iteration at most (default: 40; bilateral, guided, tv: a refit time of 1.4 length units squared)")
+                    "refit steps per main iteration at most (default: 40; bilateral, guided, tv: a refit time of 1.4 "
+                    "length units squared)")
         ->check(CLI::Range(1, 100000));
     cmd->add_option("--refit-tolerance", s.refit_tolerance,
                     "the refit stops when D falls by less than this fraction of itself in a step")
-        ->check(CLI::NonNegativeNumber)->capture_default_str();
+        ->check(CLI::NonNegativeNumber)
+        ->capture_default_str();
     cmd->add_option("--refit-super-steps", s.refit_super_steps,
-                    "bilateral, guided, tv: cover the refit time in this many Runge-Kutta-Legendre super steps (0: explicit steps of --refit-dt)")
-        ->check(CLI::Range(0, 100000))->capture_default_str();
+                    "bilateral, guided, tv: cover the refit time in this many Runge-Kutta-Legendre super steps (0: "
+                    "explicit steps of --refit-dt)")
+        ->check(CLI::Range(0, 100000))
+        ->capture_default_str();
     cmd->add_flag("--extend-by-gather", s.extend_by_gather,
-                  "bilateral, guided, tv: carry the filtered normals off the surface by a filter pass at each closest point (slower; the default before 0.2)");
+                  "bilateral, guided, tv: carry the filtered normals off the surface by a filter pass at each closest "
+                  "point (slower; the default before 0.2)");
     cmd->add_flag("!--all-samples", s.thin_samples,
-                  "bilateral, guided: filter every shell sample, also where the grid is finer than 5 voxels per length unit (slower; the default before 0.2)");
+                  "bilateral, guided: filter every shell sample, also where the grid is finer than 5 voxels per length "
+                  "unit (slower; the default before 0.2)");
     cmd->add_option("--refit-dt", s.refit_dt, "refit time step, voxel² (at most 1/6)")
-        ->check(CLI::PositiveNumber)->capture_default_str();
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_flag("!--no-preserve-volume", s.preserve_volume,
                   "bilateral, guided, tv: do not shift the surface back to the volume it had before each refit");
     cmd->add_flag("--second-order", s.second_order_term, "add Appendix A's second term (Eq. 39) to the refit");
@@ -127,13 +145,16 @@ void add_smooth_options(CLI::App* cmd, PipelineOptions& p) {
                   "trimming it to the input's footprint");
     cmd->add_option("--relax-steps", p.fit.relax_steps,
                     "keep: tangential relaxation iterations (untangle what noise moved along the surface)")
-        ->check(CLI::Range(0, 100000))->capture_default_str();
+        ->check(CLI::Range(0, 100000))
+        ->capture_default_str();
     cmd->add_option("--fit-steps", p.fit.vertex_steps,
                     "keep: vertex-update iterations turning the faces to the result's normals")
-        ->check(CLI::Range(0, 100000))->capture_default_str();
+        ->check(CLI::Range(0, 100000))
+        ->capture_default_str();
     cmd->add_option("--boundary-rings", p.fit.boundary_rings,
                     "keep: an open boundary stays, and the vertices within this many edge rings of it move partly")
-        ->check(CLI::Range(0, 100000))->capture_default_str();
+        ->check(CLI::Range(0, 100000))
+        ->capture_default_str();
 }
 
 void add_decimation_options(CLI::App* cmd, PipelineOptions& p) {

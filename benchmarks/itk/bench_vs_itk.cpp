@@ -71,9 +71,7 @@ namespace {
 
 using Image = itk::Image<float, 3>;
 
-double wall_now() {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
+double wall_now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
 
 double cpu_now() {  // CPU seconds of the whole process (all threads)
     timespec t{};
@@ -127,8 +125,8 @@ public:
     using Pointer = itk::SmartPointer<Self>;
     itkNewMacro(Self)
 
-    int normal_processes = 0;      ///< ProcessNormals calls (= main iterations)
-    int refit_steps = 0;           ///< level-set iterations (= refit steps)
+        int normal_processes = 0;            ///< ProcessNormals calls (= main iterations)
+    int refit_steps = 0;                     ///< level-set iterations (= refit steps)
     double normal_wall = 0, normal_cpu = 0;  ///< seconds inside ProcessNormals
     double first_iteration_wall = -1;        ///< wall time at the first InitializeIteration (end of set-up)
 
@@ -252,22 +250,32 @@ int main(int argc, char** argv) {
             }
             return argv[++a];
         };
-        if (arg == "--resolution") resolution = std::atoi(next().c_str());
-        else if (arg == "--iterations") iterations = std::atoi(next().c_str());
-        else if (arg == "--refit") refit = std::atoi(next().c_str());
-        else if (arg == "--itk-threads") itk_threads = std::atoi(next().c_str());
-        else if (arg == "--mu") mu = float(std::atof(next().c_str()));
-        else if (arg == "--samples") samples = std::size_t(std::atoll(next().c_str()));
-        else if (arg == "--modes") modes = split(next());
-        else if (arg == "--no-itk") run_itk = false;
+        if (arg == "--resolution")
+            resolution = std::atoi(next().c_str());
+        else if (arg == "--iterations")
+            iterations = std::atoi(next().c_str());
+        else if (arg == "--refit")
+            refit = std::atoi(next().c_str());
+        else if (arg == "--itk-threads")
+            itk_threads = std::atoi(next().c_str());
+        else if (arg == "--mu")
+            mu = float(std::atof(next().c_str()));
+        else if (arg == "--samples")
+            samples = std::size_t(std::atoll(next().c_str()));
+        else if (arg == "--modes")
+            modes = split(next());
+        else if (arg == "--no-itk")
+            run_itk = false;
         else if (arg == "--nf-threads") {
             nf_threads.clear();
             for (const auto& t : split(next())) nf_threads.push_back(std::atoi(t.c_str()));
         } else if (!arg.empty() && arg[0] == '-') {
-            std::fprintf(stderr, "nf_bench_vs_itk: unknown option %s (see the comment at the top of bench_vs_itk.cpp)\n",
+            std::fprintf(stderr,
+                         "nf_bench_vs_itk: unknown option %s (see the comment at the top of bench_vs_itk.cpp)\n",
                          arg.c_str());
             return 2;
-        } else meshes.push_back(arg);
+        } else
+            meshes.push_back(arg);
     }
     if (resolution < 8 || iterations < 1 || refit < 1 || itk_threads < 1 || mu <= 0 || samples < 1) {
         std::fprintf(stderr, "nf_bench_vs_itk: bad option value\n");
@@ -303,16 +311,18 @@ int main(int argc, char** argv) {
             const std::string gt_path = us == std::string::npos ? std::string() : path.substr(0, us) + "_gt.ply";
             if (!gt_path.empty() && gt_path != path && std::ifstream(gt_path).good()) truth = read_mesh(gt_path);
             const double h = input.grid.voxel_size;
-            std::printf("## %s, resolution %d: grid %d x %d x %d, h = %.4g, %zu band voxels; %d main iterations "
-                        "(25 normal steps + at most %d refit steps each); ITK %s, %d thread(s)\n\n",
-                        path.c_str(), resolution, input.grid.dims[0], input.grid.dims[1], input.grid.dims[2], h,
-                        sr.band_voxels, iterations, refit, ITK_VERSION_STRING, itk_threads);
+            std::printf(
+                "## %s, resolution %d: grid %d x %d x %d, h = %.4g, %zu band voxels; %d main iterations "
+                "(25 normal steps + at most %d refit steps each); ITK %s, %d thread(s)\n\n",
+                path.c_str(), resolution, input.grid.dims[0], input.grid.dims[1], input.grid.dims[2], h, sr.band_voxels,
+                iterations, refit, ITK_VERSION_STRING, itk_threads);
             std::fflush(stdout);
 
-            std::printf("| run | threads | main iterations | normal / refit steps per iteration | wall s per iteration "
-                        "| CPU s per iteration | wall s per iteration, set-up excluded | peak RSS rise MiB "
-                        "| ITK / this, wall | ITK / this, CPU | ITK / this, wall, set-up excluded |\n"
-                        "|---|---|---|---|---|---|---|---|---|---|---|\n");
+            std::printf(
+                "| run | threads | main iterations | normal / refit steps per iteration | wall s per iteration "
+                "| CPU s per iteration | wall s per iteration, set-up excluded | peak RSS rise MiB "
+                "| ITK / this, wall | ITK / this, CPU | ITK / this, wall, set-up excluded |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|\n");
             std::fflush(stdout);
             Row itk_row;  // the last ITK run, for the ratios of the normalflow rows after it
             bool have_itk_row = false;
@@ -333,8 +343,8 @@ int main(int argc, char** argv) {
                     std::snprintf(buf, sizeof buf, "%.1f", (itk_row.loop_wall / ni) / (r.loop_wall / n));
                     ratio_l = buf;
                 }
-                std::printf("| %s | %d | %d | %s | %.2f | %.2f | %.2f | %s | %s | %s | %s |\n", r.name.c_str(), r.threads,
-                            r.iterations, r.steps.c_str(), r.m.wall / n, r.m.cpu / n, r.loop_wall / n,
+                std::printf("| %s | %d | %d | %s | %.2f | %.2f | %.2f | %s | %s | %s | %s |\n", r.name.c_str(),
+                            r.threads, r.iterations, r.steps.c_str(), r.m.wall / n, r.m.cpu / n, r.loop_wall / n,
                             mib(r.m.peak_mib).c_str(), ratio_w.c_str(), ratio_c.c_str(), ratio_l.c_str());
                 std::fflush(stdout);
             };
@@ -370,8 +380,10 @@ int main(int argc, char** argv) {
                         steps = filter->refit_steps;
                     };
                     r.m = measure([&] {
-                        if (aniso) run(ItkAniso::New());
-                        else run(ItkIso::New());
+                        if (aniso)
+                            run(ItkAniso::New());
+                        else
+                            run(ItkIso::New());
                     });
                     r.iterations = processes;
                     r.loop_wall = r.m.wall - setup;
@@ -418,8 +430,10 @@ int main(int argc, char** argv) {
                     std::snprintf(buf, sizeof buf, "25 / %.1f", double(refits) / std::max(rep.iterations_run(), 1));
                     r.steps = buf;
                     print_row(r);
-                    if (first_values.empty()) first_values = v.values;
-                    else identical = identical && first_values == v.values;
+                    if (first_values.empty())
+                        first_values = v.values;
+                    else
+                        identical = identical && first_values == v.values;
                     nf_result = std::move(v);
                 }
                 if (nf_threads.size() > 1)
@@ -432,8 +446,9 @@ int main(int argc, char** argv) {
                 const auto line = [&](const char* what, const Mesh& a, const Mesh& b) {
                     const SurfaceDistance d = surface_distance(a, b, sopt);
                     char buf[256];
-                    std::snprintf(buf, sizeof buf, "%s: mean %.3f, rms %.3f, Hausdorff %.2f voxels, mean normal angle %.1f deg",
-                                  what, d.mean / h, d.rms / h, d.hausdorff / h, d.mean_normal_angle_deg);
+                    std::snprintf(buf, sizeof buf,
+                                  "%s: mean %.3f, rms %.3f, Hausdorff %.2f voxels, mean normal angle %.1f deg", what,
+                                  d.mean / h, d.rms / h, d.hausdorff / h, d.mean_normal_angle_deg);
                     agreement.push_back(buf);
                 };
                 if (!truth.triangles.empty() && mode == modes.front())

@@ -78,23 +78,30 @@ int main(int argc, char** argv) {
             }
             return argv[++a];
         };
-        if (arg == "--mesh") mesh_path = next();
-        else if (arg == "--resolution") resolution = std::atoi(next());
-        else if (arg == "--runs") runs = std::atoi(next());
-        else if (arg == "--threads") threads = std::atoi(next());
-        else if (arg == "--iterations") iterations = std::atoi(next());
-        else if (arg == "--mode") mode = next();
+        if (arg == "--mesh")
+            mesh_path = next();
+        else if (arg == "--resolution")
+            resolution = std::atoi(next());
+        else if (arg == "--runs")
+            runs = std::atoi(next());
+        else if (arg == "--threads")
+            threads = std::atoi(next());
+        else if (arg == "--iterations")
+            iterations = std::atoi(next());
+        else if (arg == "--mode")
+            mode = next();
         else if (!arg.empty() && arg[0] == '-') {
             std::fprintf(stderr, "nf_ab_engine: unknown option %s (see the comment at the top of ab_engine.cpp)\n",
                          arg.c_str());
             return 2;
-        } else libs.push_back(argv[a]);
+        } else
+            libs.push_back(argv[a]);
     }
-    if (libs.size() != 2 || resolution < 8 || runs < 1 || threads < 0 || iterations < 1 ||
-        !bench::is_variant(mode)) {
-        std::fprintf(stderr, "usage: nf_ab_engine LIB_A LIB_B [--mesh PATH] [--resolution N] [--runs N] "
-                             "[--threads N] [--mode paper25|isotropic|anisotropic|highboost|mcf|second_order] "
-                             "[--iterations N]\n");
+    if (libs.size() != 2 || resolution < 8 || runs < 1 || threads < 0 || iterations < 1 || !bench::is_variant(mode)) {
+        std::fprintf(stderr,
+                     "usage: nf_ab_engine LIB_A LIB_B [--mesh PATH] [--resolution N] [--runs N] "
+                     "[--threads N] [--mode paper25|isotropic|anisotropic|highboost|mcf|second_order] "
+                     "[--iterations N]\n");
         return 2;
     }
     const SmoothFn fn[2] = {load(libs[0]), load(libs[1])};
@@ -122,11 +129,13 @@ int main(int argc, char** argv) {
                 per_iteration[w].push_back(total / iterations);
                 if (r == 0) result[w] = std::move(v);
             }
-        std::printf("%s, resolution %d, %s, %d thread(s), %d run(s) each, interleaved\n\n", mesh_path.c_str(), resolution,
-                    mode.c_str(), threads, runs);
-        std::printf("Wall seconds per main iteration, min / median; the band moves and reinitialisations include the "
-                    "one before the first iteration.\n\n");
-        std::printf("| build | normal loop | refit | band move + reinitialisation | main iteration |\n|---|---|---|---|---|\n");
+        std::printf("%s, resolution %d, %s, %d thread(s), %d run(s) each, interleaved\n\n", mesh_path.c_str(),
+                    resolution, mode.c_str(), threads, runs);
+        std::printf(
+            "Wall seconds per main iteration, min / median; the band moves and reinitialisations include the "
+            "one before the first iteration.\n\n");
+        std::printf(
+            "| build | normal loop | refit | band move + reinitialisation | main iteration |\n|---|---|---|---|---|\n");
         const std::vector<double>* cols[4] = {normals, refit, reinit, per_iteration};
         for (int e = 0; e < 2; ++e) {
             std::printf("| %s %s", e ? "B" : "A", libs[e]);

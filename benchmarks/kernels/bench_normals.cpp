@@ -154,10 +154,9 @@ void BM_MainIteration(benchmark::State& state, const std::string& name, const st
 void register_all() {
     for (const char* name : {"fandisk", "bunny", "paper221x221x161"})
         for (const char* variant : {"isotropic", "anisotropic", "paper25"})
-            benchmark::RegisterBenchmark((std::string("MainIteration/") + name + "/" + variant).c_str(),
-                                         [n = std::string(name), m = std::string(variant)](benchmark::State& s) {
-                                             BM_MainIteration(s, n, m);
-                                         })
+            benchmark::RegisterBenchmark(
+                (std::string("MainIteration/") + name + "/" + variant).c_str(),
+                [n = std::string(name), m = std::string(variant)](benchmark::State& s) { BM_MainIteration(s, n, m); })
                 ->ArgName("threads")
                 ->Arg(1)
                 ->Arg(2)

@@ -5,10 +5,10 @@
 
 #include <benchmark/benchmark.h>
 
+#include "../../tests/sdf/sdf_test_meshes.h"
 #include "io/cgal/aabb_distance.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/winding_number.h"
-#include "../../tests/sdf/sdf_test_meshes.h"
 
 using namespace normalflow;
 
@@ -32,9 +32,15 @@ void closest(benchmark::State& st, Make make) {
     st.counters["faces"] = double(m.triangles.size());
 }
 
-void BM_ClosestBvh(benchmark::State& st) { closest(st, [](const Mesh& m) { return make_bvh_query(m); }); }
-void BM_ClosestCgalAabb(benchmark::State& st) { closest(st, [](const Mesh& m) { return make_aabb_query(m); }); }
-void BM_ClosestBruteForce(benchmark::State& st) { closest(st, [](const Mesh& m) { return make_brute_force_query(m); }); }
+void BM_ClosestBvh(benchmark::State& st) {
+    closest(st, [](const Mesh& m) { return make_bvh_query(m); });
+}
+void BM_ClosestCgalAabb(benchmark::State& st) {
+    closest(st, [](const Mesh& m) { return make_aabb_query(m); });
+}
+void BM_ClosestBruteForce(benchmark::State& st) {
+    closest(st, [](const Mesh& m) { return make_brute_force_query(m); });
+}
 
 void BM_WindingFast(benchmark::State& st) {
     const Mesh m = test::icosphere(1.0, int(st.range(0)));

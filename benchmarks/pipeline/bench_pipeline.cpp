@@ -88,16 +88,19 @@ int main(int argc, char** argv) {
                     rep.seconds.voxelize);
         std::printf("| extract_surface | %.2f |\n", rep.seconds.extract);
         std::printf("| **end to end (repair + voxelize + extract)** | **%.2f** |\n\n", rep.seconds.total);
-        std::printf("grid %d x %d x %d, h = %.4g; band voxels %zu; blocks %zu (of %zu candidates); winding evaluations %zu; "
-                    "uncertain signs %zu; volume %.1f MiB; output %zu vertices, %zu triangles; peak RSS %.0f MiB\n\n",
-                    sr.grid.dims[0], sr.grid.dims[1], sr.grid.dims[2], sr.grid.voxel_size, sr.band_voxels, sr.blocks,
-                    sr.candidate_blocks, sr.winding_evaluations, sr.uncertain_sign, double(sr.memory_bytes) / 1048576.0,
-                    rep.extract.vertices, rep.extract.triangles, peak_mib());
+        std::printf(
+            "grid %d x %d x %d, h = %.4g; band voxels %zu; blocks %zu (of %zu candidates); winding evaluations %zu; "
+            "uncertain signs %zu; volume %.1f MiB; output %zu vertices, %zu triangles; peak RSS %.0f MiB\n\n",
+            sr.grid.dims[0], sr.grid.dims[1], sr.grid.dims[2], sr.grid.voxel_size, sr.band_voxels, sr.blocks,
+            sr.candidate_blocks, sr.winding_evaluations, sr.uncertain_sign, double(sr.memory_bytes) / 1048576.0,
+            rep.extract.vertices, rep.extract.triangles, peak_mib());
         (void)out;
 
         if (!sweep) return 0;
         std::printf("## Resolution sweep: %s (%zu triangles)\n\n", path.c_str(), base.triangles.size());
-        std::printf("| resolution | band voxels | ratio | volume MiB | ratio | dense grid MiB | voxelize s | extract s | peak RSS MiB |\n");
+        std::printf(
+            "| resolution | band voxels | ratio | volume MiB | ratio | dense grid MiB | voxelize s | extract s | peak "
+            "RSS MiB |\n");
         std::printf("|---|---|---|---|---|---|---|---|---|\n");
         std::size_t prev_band = 0, prev_mem = 0;
         for (int r : {128, 256, 512, 1024}) {

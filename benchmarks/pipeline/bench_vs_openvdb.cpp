@@ -47,8 +47,9 @@ int main(int argc, char** argv) {
 
     std::printf("## Scan conversion: normalflow vs OpenVDB meshToLevelSet, %s (%zu triangles), band 3 voxels\n\n",
                 path.c_str(), m.triangles.size());
-    std::printf("| resolution | normalflow s | OpenVDB s | normalflow band voxels | OpenVDB active voxels | "
-                "normalflow MiB | OpenVDB MiB |\n|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "| resolution | normalflow s | OpenVDB s | normalflow band voxels | OpenVDB active voxels | "
+        "normalflow MiB | OpenVDB MiB |\n|---|---|---|---|---|---|---|\n");
     for (int res : resolutions) {
         const double h = longest / res;
         auto t0 = std::chrono::steady_clock::now();

@@ -77,10 +77,14 @@ int main(int argc, char** argv) {
             }
             return argv[++i];
         };
-        if (a == "--data") data = next();
-        else if (a == "--resolution") resolution = std::stoi(next());
-        else if (a == "--target-faces") target_faces = std::stoul(next());
-        else if (a == "--only") only.push_back(next());
+        if (a == "--data")
+            data = next();
+        else if (a == "--resolution")
+            resolution = std::stoi(next());
+        else if (a == "--target-faces")
+            target_faces = std::stoul(next());
+        else if (a == "--only")
+            only.push_back(next());
         else {
             std::fprintf(stderr, "nf_bench_decimate: unknown argument %s\n", a.c_str());
             return 2;
@@ -90,8 +94,9 @@ int main(int argc, char** argv) {
                                              "medical/brainmesh_icbm152_lh.ply"};
     std::printf("resolution %d, --target-faces %zu; Hausdorff in voxels h (sampled, both ways); 2 cores\n\n",
                 resolution, target_faces);
-    std::printf("| model | extracted faces | decimator | faces | seconds | Hausdorff (h) | closed, manifold | "
-                "self-intersecting pairs | note |\n|---|---|---|---|---|---|---|---|---|\n");
+    std::printf(
+        "| model | extracted faces | decimator | faces | seconds | Hausdorff (h) | closed, manifold | "
+        "self-intersecting pairs | note |\n|---|---|---|---|---|---|---|---|---|\n");
     int failures = 0;
     for (const auto& name : models) {
         bool skip = !only.empty();
@@ -134,7 +139,8 @@ int main(int argc, char** argv) {
             Result rc = measure(ext, c, dc.seconds_decimate);
             rc.note = "cleanup_mesh FaceCount (repairs, edge collapse, self-intersection repair)";
 
-            const std::pair<const char*, const Result*> rows[4] = {{"quadric", &rq}, {"meshopt", &rm}, {"auto", &ra}, {"cgal", &rc}};
+            const std::pair<const char*, const Result*> rows[4] = {
+                {"quadric", &rq}, {"meshopt", &rm}, {"auto", &ra}, {"cgal", &rc}};
             for (const auto& [label, r] : rows)
                 std::printf("| %s | %zu | %s | %zu | %.2f | %.3f | %s, %s | %zu | %s |\n", name.c_str(),
                             ext.triangles.size(), label, r->faces, r->seconds, r->hausdorff / h,

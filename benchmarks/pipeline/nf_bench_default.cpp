@@ -97,12 +97,18 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has = i + 1 < argc;
-        if (a == "--samples" && has) co.sampling.samples = std::strtoull(argv[++i], nullptr, 10);
-        else if (a == "--md" && has) md_path = argv[++i];
-        else if (a == "--threads" && has) threads = std::atoi(argv[++i]);
-        else if (a == "--repeat" && has) repeat = std::max(1, std::atoi(argv[++i]));
-        else if (a == "--only" && has) only.emplace_back(argv[++i]);
-        else if (!a.starts_with("--")) data = a;
+        if (a == "--samples" && has)
+            co.sampling.samples = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--md" && has)
+            md_path = argv[++i];
+        else if (a == "--threads" && has)
+            threads = std::atoi(argv[++i]);
+        else if (a == "--repeat" && has)
+            repeat = std::max(1, std::atoi(argv[++i]));
+        else if (a == "--only" && has)
+            only.emplace_back(argv[++i]);
+        else if (!a.starts_with("--"))
+            data = a;
         else {
             std::fprintf(stderr, "nf_bench_default: unknown or incomplete argument %s\n", a.c_str());
             return 2;
@@ -110,7 +116,8 @@ int main(int argc, char** argv) {
     }
     const std::vector<bench::Pair> pairs = bench::find_pairs(data);
     if (pairs.empty()) {
-        std::fprintf(stderr, "nf_bench_default: %s: no pairs (pairs_gnf, pairs_gcn, pairs_nllr)\n", data.string().c_str());
+        std::fprintf(stderr, "nf_bench_default: %s: no pairs (pairs_gnf, pairs_gcn, pairs_nllr)\n",
+                     data.string().c_str());
         return 1;
     }
     const fs::path tmp = fs::temp_directory_path() / ("nf_bench_default_" + std::to_string(::getpid()));
@@ -123,8 +130,8 @@ int main(int argc, char** argv) {
     int failures = 0, within = 0, count = 0;
     for (const bench::Pair& p : pairs) {
         const std::string key = p.set + "/" + p.noisy_name;
-        if (!only.empty() &&
-            std::none_of(only.begin(), only.end(), [&](const std::string& o) { return key.find(o) != std::string::npos; }))
+        if (!only.empty() && std::none_of(only.begin(), only.end(),
+                                          [&](const std::string& o) { return key.find(o) != std::string::npos; }))
             continue;
         try {
             const Mesh gt = read_mesh(p.truth.string());

@@ -72,14 +72,22 @@ int main(int argc, char** argv) {
             }
             return argv[++i];
         };
-        if (a == "--data") data = next();
-        else if (a == "--resolution") resolution = std::stoi(next());
-        else if (a == "--target-faces") target_faces = std::stoul(next());
-        else if (a == "--min-dihedral") min_dihedral = std::stod(next());
-        else if (a == "--out") out = next();
-        else if (a == "--only") only.push_back(next());
-        else if (a == "--no-tetgen") tetgen = false;
-        else if (a == "--json") json = true;
+        if (a == "--data")
+            data = next();
+        else if (a == "--resolution")
+            resolution = std::stoi(next());
+        else if (a == "--target-faces")
+            target_faces = std::stoul(next());
+        else if (a == "--min-dihedral")
+            min_dihedral = std::stod(next());
+        else if (a == "--out")
+            out = next();
+        else if (a == "--only")
+            only.push_back(next());
+        else if (a == "--no-tetgen")
+            tetgen = false;
+        else if (a == "--json")
+            json = true;
         else {
             std::fprintf(stderr, "nf_bench_output: unknown argument %s\n", a.c_str());
             return 2;
@@ -170,14 +178,18 @@ int main(int argc, char** argv) {
 
     std::printf("resolution %d, cleanup --target-faces %zu, tetmesh --min-dihedral %g; Hausdorff in voxels (h)\n\n",
                 resolution, target_faces, min_dihedral);
-    std::printf("| model | extract: faces, PLY bytes, s | cleanup: faces, PLY bytes, s, Hausdorff, SI left | "
-                ".drc: bytes, s, Hausdorff | .glb (Draco): bytes, s | TetGen: tets, min dihedral, s |\n");
+    std::printf(
+        "| model | extract: faces, PLY bytes, s | cleanup: faces, PLY bytes, s, Hausdorff, SI left | "
+        ".drc: bytes, s, Hausdorff | .glb (Draco): bytes, s | TetGen: tets, min dihedral, s |\n");
     std::printf("|---|---|---|---|---|---|\n");
     for (const Row& r : rows) {
         char tet[160];
-        if (!tetgen) std::snprintf(tet, sizeof tet, "not run");
-        else if (!r.tet_error.empty()) std::snprintf(tet, sizeof tet, "failed: %.120s", r.tet_error.c_str());
-        else std::snprintf(tet, sizeof tet, "%zu, %.2f°, %.1f", r.tets, r.tet_min_dihedral, r.tet_s);
+        if (!tetgen)
+            std::snprintf(tet, sizeof tet, "not run");
+        else if (!r.tet_error.empty())
+            std::snprintf(tet, sizeof tet, "failed: %.120s", r.tet_error.c_str());
+        else
+            std::snprintf(tet, sizeof tet, "%zu, %.2f°, %.1f", r.tets, r.tet_min_dihedral, r.tet_s);
         std::printf("| %s | %zu, %zu, %.1f | %zu, %zu, %.1f, %.3f, %zu | %zu, %.3f, %.4f | %zu, %.3f | %s |\n",
                     r.model.c_str(), r.extract_faces, r.extract_bytes, r.extract_s, r.clean_faces, r.clean_bytes,
                     r.clean_s, r.clean_haus / r.h, r.clean_si, r.drc_bytes, r.drc_s, r.drc_haus / r.h, r.glb_bytes,
@@ -188,17 +200,17 @@ int main(int argc, char** argv) {
                     target_faces, min_dihedral);
         for (std::size_t i = 0; i < rows.size(); ++i) {
             const Row& r = rows[i];
-            std::printf("%s{\"model\":\"%s\",\"resolution\":%d,\"voxel_size\":%.9g,\"extract_faces\":%zu,"
-                        "\"extract_bytes\":%zu,\"extract_seconds\":%.4f,\"cleanup_faces\":%zu,\"cleanup_bytes\":%zu,"
-                        "\"cleanup_seconds\":%.4f,\"cleanup_hausdorff\":%.9g,\"cleanup_self_intersections\":%zu,"
-                        "\"drc_bytes\":%zu,\"drc_seconds\":%.4f,\"drc_hausdorff\":%.9g,\"glb_bytes\":%zu,"
-                        "\"glb_seconds\":%.4f,\"tetrahedra\":%zu,\"min_dihedral_deg\":%.4f,\"tetgen_seconds\":%.4f,"
-                        "\"tetgen_ok\":%s}",
-                        i ? "," : "",
-                        r.model.c_str(), resolution, r.h, r.extract_faces, r.extract_bytes, r.extract_s,
-                        r.clean_faces, r.clean_bytes, r.clean_s, r.clean_haus, r.clean_si, r.drc_bytes, r.drc_s,
-                        r.drc_haus, r.glb_bytes, r.glb_s, r.tets, r.tet_min_dihedral, r.tet_s,
-                        (tetgen && r.tet_error.empty()) ? "true" : "false");
+            std::printf(
+                "%s{\"model\":\"%s\",\"resolution\":%d,\"voxel_size\":%.9g,\"extract_faces\":%zu,"
+                "\"extract_bytes\":%zu,\"extract_seconds\":%.4f,\"cleanup_faces\":%zu,\"cleanup_bytes\":%zu,"
+                "\"cleanup_seconds\":%.4f,\"cleanup_hausdorff\":%.9g,\"cleanup_self_intersections\":%zu,"
+                "\"drc_bytes\":%zu,\"drc_seconds\":%.4f,\"drc_hausdorff\":%.9g,\"glb_bytes\":%zu,"
+                "\"glb_seconds\":%.4f,\"tetrahedra\":%zu,\"min_dihedral_deg\":%.4f,\"tetgen_seconds\":%.4f,"
+                "\"tetgen_ok\":%s}",
+                i ? "," : "", r.model.c_str(), resolution, r.h, r.extract_faces, r.extract_bytes, r.extract_s,
+                r.clean_faces, r.clean_bytes, r.clean_s, r.clean_haus, r.clean_si, r.drc_bytes, r.drc_s, r.drc_haus,
+                r.glb_bytes, r.glb_s, r.tets, r.tet_min_dihedral, r.tet_s,
+                (tetgen && r.tet_error.empty()) ? "true" : "false");
         }
         std::printf("]}\n");
     }

@@ -46,8 +46,7 @@ std::vector<Pair> find_pairs(const fs::path& data) {
         std::sort(files.begin(), files.end());
         for (const auto& f : files) {
             const std::string stem = f.stem().string();
-            if (f.extension() != ".ply" || stem.ends_with("_gt") || stem.find("result") != std::string::npos)
-                continue;
+            if (f.extension() != ".ply" || stem.ends_with("_gt") || stem.find("result") != std::string::npos) continue;
             const auto us = stem.rfind('_');
             if (us == std::string::npos) continue;
             const fs::path gt = dir / (stem.substr(0, us) + "_gt.ply");
@@ -78,19 +77,32 @@ int main(int argc, char** argv) {
             }
             return argv[++i];
         };
-        if (a == "--data") data = next();
-        else if (a == "--resolution") resolution = std::stoi(next());
-        else if (a == "--iterations") base.iterations = std::stoi(next());
-        else if (a == "--mu") base.mu = std::stof(next());
-        else if (a == "--mu-robust") base.mu_robust = std::stof(next());
-        else if (a == "--presmooth") base.conductance_presmooth_steps = std::stoi(next());
-        else if (a == "--normal-dt") base.normal_dt = std::stof(next());
-        else if (a == "--normal-steps") base.normal_steps = std::stoi(next());
-        else if (a == "--samples") sampling.samples = std::stoul(next());
-        else if (a == "--only") only.push_back(next());
-        else if (a == "--modes") modes = next();
-        else if (a == "--out") out = next();
-        else if (a == "--threads") base.threads = std::stoi(next());
+        if (a == "--data")
+            data = next();
+        else if (a == "--resolution")
+            resolution = std::stoi(next());
+        else if (a == "--iterations")
+            base.iterations = std::stoi(next());
+        else if (a == "--mu")
+            base.mu = std::stof(next());
+        else if (a == "--mu-robust")
+            base.mu_robust = std::stof(next());
+        else if (a == "--presmooth")
+            base.conductance_presmooth_steps = std::stoi(next());
+        else if (a == "--normal-dt")
+            base.normal_dt = std::stof(next());
+        else if (a == "--normal-steps")
+            base.normal_steps = std::stoi(next());
+        else if (a == "--samples")
+            sampling.samples = std::stoul(next());
+        else if (a == "--only")
+            only.push_back(next());
+        else if (a == "--modes")
+            modes = next();
+        else if (a == "--out")
+            out = next();
+        else if (a == "--threads")
+            base.threads = std::stoi(next());
         else {
             std::fprintf(stderr, "nf_bench_quality: unknown argument %s\n", a.c_str());
             return 2;
@@ -104,17 +116,18 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "nf_bench_quality: no pairs under %s (pairs_gnf, pairs_gcn)\n", data.string().c_str());
         return 1;
     }
-    std::printf("resolution %d, iterations %d (0: the mode's default), normal_steps %d, normal_dt %g, mu %g, presmooth %d, samples %zu\n",
-                resolution, base.iterations, base.normal_steps, double(base.normal_dt), double(base.mu),
-                base.conductance_presmooth_steps, sampling.samples);
+    std::printf(
+        "resolution %d, iterations %d (0: the mode's default), normal_steps %d, normal_dt %g, mu %g, presmooth %d, "
+        "samples %zu\n",
+        resolution, base.iterations, base.normal_steps, double(base.normal_dt), double(base.mu),
+        base.conductance_presmooth_steps, sampling.samples);
     std::printf("%-28s %-11s %10s %10s %10s %9s %9s\n", "pair", "result", "mean(vox)", "rms(vox)", "haus(vox)",
                 "angle(deg)", "seconds");
     std::fflush(stdout);
     int failures = 0;
     for (const Pair& p : pairs) {
-        if (!only.empty() && std::none_of(only.begin(), only.end(), [&](const std::string& s) {
-                return p.name.find(s) != std::string::npos;
-            }))
+        if (!only.empty() && std::none_of(only.begin(), only.end(),
+                                          [&](const std::string& s) { return p.name.find(s) != std::string::npos; }))
             continue;
         try {
             const Mesh noisy = read_mesh(p.noisy.string());
@@ -141,8 +154,8 @@ int main(int argc, char** argv) {
                 pf.smoothing = false;
                 row("gt-voxel", smooth_mesh(truth, pf).mesh, 0.0);
             }
-            for (const auto& [key, mode] : {std::pair{"iso", SmoothMode::Isotropic},
-                                             std::pair{"aniso", SmoothMode::Anisotropic}}) {
+            for (const auto& [key, mode] :
+                 {std::pair{"iso", SmoothMode::Isotropic}, std::pair{"aniso", SmoothMode::Anisotropic}}) {
                 if (!selected(key)) continue;
                 PipelineOptions pm = po;
                 pm.smooth.mode = mode;

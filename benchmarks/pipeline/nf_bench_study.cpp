@@ -21,26 +21,26 @@
 // Then the triangulation experiment: one torus meshed two ways, smoothed by Taubin and by normalflow.
 // Not part of the test suite (minutes to an hour; see benchmarks/README.md).
 #include <algorithm>
-#include <cmath>
-#include <utility>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
-#include "io/util/atomic_file.h"
-#include "study_pairs.h"
 #include "io/io.h"
 #include "io/openmesh/smoothing.h"
 #include "io/pipeline/pipeline.h"
+#include "io/util/atomic_file.h"
 #include "metrics/compare.h"
+#include "study_pairs.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
-using normalflow::bench::Pair;
 using normalflow::bench::find_pairs;
+using normalflow::bench::Pair;
 
 namespace {
 
@@ -60,8 +60,8 @@ Mesh torus(double R, double r, int nu, int nv, double grade) {
             const double t = double(i) / nu;
             const double u = 2 * pi * (t + grade * std::sin(2 * pi * t) / (2 * pi));
             const double v = 2 * pi * j / nv;
-            m.positions.push_back(Vec3f(Vec3d((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u),
-                                              r * std::sin(v))));
+            m.positions.push_back(Vec3f(
+                Vec3d((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v))));
         }
     auto id = [&](int i, int j) { return std::uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
     for (int i = 0; i < nu; ++i)
@@ -132,15 +132,24 @@ int main(int argc, char** argv) {
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has = i + 1 < argc;
-        if (a == "--samples" && has) co.sampling.samples = std::strtoull(argv[++i], nullptr, 10);
-        else if (a == "--csv" && has) csv_path = argv[++i];
-        else if (a == "--md" && has) md_path = argv[++i];
-        else if (a == "--resolution" && has) resolution = std::atoi(argv[++i]);
-        else if (a == "--threads" && has) threads = std::atoi(argv[++i]);
-        else if (a == "--only" && has) only.emplace_back(argv[++i]);
-        else if (a == "--no-normalflow") with_normalflow = false;
-        else if (a == "--modes" && has) modes = argv[++i];
-        else if (!a.starts_with("--")) data = a;
+        if (a == "--samples" && has)
+            co.sampling.samples = std::strtoull(argv[++i], nullptr, 10);
+        else if (a == "--csv" && has)
+            csv_path = argv[++i];
+        else if (a == "--md" && has)
+            md_path = argv[++i];
+        else if (a == "--resolution" && has)
+            resolution = std::atoi(argv[++i]);
+        else if (a == "--threads" && has)
+            threads = std::atoi(argv[++i]);
+        else if (a == "--only" && has)
+            only.emplace_back(argv[++i]);
+        else if (a == "--no-normalflow")
+            with_normalflow = false;
+        else if (a == "--modes" && has)
+            modes = argv[++i];
+        else if (!a.starts_with("--"))
+            data = a;
         else {
             std::fprintf(stderr, "nf_bench_study: unknown or incomplete argument %s\n", a.c_str());
             return 2;
@@ -148,14 +157,16 @@ int main(int argc, char** argv) {
     }
     const std::vector<Pair> pairs = find_pairs(data);
     if (pairs.empty()) {
-        std::fprintf(stderr, "nf_bench_study: %s: no pairs (pairs_gnf, pairs_gcn, pairs_nllr)\n", data.string().c_str());
+        std::fprintf(stderr, "nf_bench_study: %s: no pairs (pairs_gnf, pairs_gcn, pairs_nllr)\n",
+                     data.string().c_str());
         return 1;
     }
 
     std::vector<Row> rows;
-    std::string csv = "set,noisy,method,parameters,ms,mean_relative,rms_relative,hausdorff_relative,"
-                      "mean_normal_angle_deg,volume_change,crease_preservation,face_normal_angle_deg,"
-                      "mean_vertex_distance_relative\n";
+    std::string csv =
+        "set,noisy,method,parameters,ms,mean_relative,rms_relative,hausdorff_relative,"
+        "mean_normal_angle_deg,volume_change,crease_preservation,face_normal_angle_deg,"
+        "mean_vertex_distance_relative\n";
     auto save_csv = [&] {
         if (csv_path.empty()) return;
         AtomicFile f(csv_path, "nf_bench_study");
@@ -165,8 +176,8 @@ int main(int argc, char** argv) {
     int failures = 0;
     for (const Pair& p : pairs) {
         const std::string key = p.set + "/" + p.noisy_name;
-        if (!only.empty() &&
-            std::none_of(only.begin(), only.end(), [&](const std::string& o) { return key.find(o) != std::string::npos; }))
+        if (!only.empty() && std::none_of(only.begin(), only.end(),
+                                          [&](const std::string& o) { return key.find(o) != std::string::npos; }))
             continue;
         try {
             const Mesh gt = read_mesh(p.truth.string());
@@ -228,10 +239,11 @@ int main(int argc, char** argv) {
                     t += ',';
                     return list.find(t) != std::string::npos;
                 };
-                const std::pair<const char*, SmoothMode> study_modes[] = {
-                    {"iso", SmoothMode::Isotropic}, {"aniso", SmoothMode::Anisotropic},
-                    {"bilateral", SmoothMode::Bilateral}, {"guided", SmoothMode::Guided},
-                    {"tv", SmoothMode::TotalVariation}};
+                const std::pair<const char*, SmoothMode> study_modes[] = {{"iso", SmoothMode::Isotropic},
+                                                                          {"aniso", SmoothMode::Anisotropic},
+                                                                          {"bilateral", SmoothMode::Bilateral},
+                                                                          {"guided", SmoothMode::Guided},
+                                                                          {"tv", SmoothMode::TotalVariation}};
                 for (const auto& [token, mode] : study_modes) {
                     if (!wanted(token)) continue;
                     t0 = now_ms();
@@ -270,12 +282,11 @@ int main(int argc, char** argv) {
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Row& r : rows) {
         char buf[640];
-        std::snprintf(buf, sizeof buf,
-                      "| %s | %s | %s | %s | %.0f | %.3e | %.3e | %.3e | %.2f | %+.2f%% | %.1f%% | %s | %s |\n",
-                      r.set.c_str(), r.noisy.c_str(), r.method.c_str(), r.params.c_str(), r.ms, r.c.mean_relative,
-                      r.c.rms_relative, r.c.hausdorff_relative, r.c.distance.mean_normal_angle_deg,
-                      100 * r.c.volume_change, 100 * r.c.crease.fraction, face_angle(r.c, "%.2f", "-").c_str(),
-                      vertex_distance(r.c, "%.3e", "-").c_str());
+        std::snprintf(
+            buf, sizeof buf, "| %s | %s | %s | %s | %.0f | %.3e | %.3e | %.3e | %.2f | %+.2f%% | %.1f%% | %s | %s |\n",
+            r.set.c_str(), r.noisy.c_str(), r.method.c_str(), r.params.c_str(), r.ms, r.c.mean_relative,
+            r.c.rms_relative, r.c.hausdorff_relative, r.c.distance.mean_normal_angle_deg, 100 * r.c.volume_change,
+            100 * r.c.crease.fraction, face_angle(r.c, "%.2f", "-").c_str(), vertex_distance(r.c, "%.3e", "-").c_str());
         md += buf;
     }
     std::printf("%s", md.c_str());
@@ -292,9 +303,10 @@ int main(int argc, char** argv) {
         taubin_smooth(b, o);
         const auto ea = torus_error(a, R, r), eb = torus_error(b, R, r);
         const MeshComparison ab = compare_meshes(b, a, co);
-        std::string tri = "\nTriangulation dependence (torus R=1, r=0.4, 96x48 quads, uniform vs u-graded):\n\n"
-                          "| method | max vertex distance to the torus (uniform / graded) | Hausdorff between the two results "
-                          "(/ diagonal) |\n|---|---|---|\n";
+        std::string tri =
+            "\nTriangulation dependence (torus R=1, r=0.4, 96x48 quads, uniform vs u-graded):\n\n"
+            "| method | max vertex distance to the torus (uniform / graded) | Hausdorff between the two results "
+            "(/ diagonal) |\n|---|---|---|\n";
         char buf[512];
         std::snprintf(buf, sizeof buf, "| Taubin K=20, uniform weights | %.3e / %.3e | %.3e (%.3e) |\n", ea.first,
                       eb.first, ab.distance.hausdorff, ab.hausdorff_relative);

@@ -80,8 +80,8 @@ void ball_row(const char* label, const Mesh& m, const Vec3d& c, double R, double
         angle += A * std::acos(std::clamp(dot(n / A, r / norm(r)), -1.0, 1.0));
         area += A;
     }
-    std::printf("| %s | %.3f | %.3f | %.2f | %.2f | %.1f |\n", label, mean, worst, angle / area * 180 / std::numbers::pi,
-                seconds, seconds / base);
+    std::printf("| %s | %.3f | %.3f | %.2f | %.2f | %.1f |\n", label, mean, worst,
+                angle / area * 180 / std::numbers::pi, seconds, seconds / base);
 }
 
 void balls(const std::vector<Run>& runs) {
@@ -127,7 +127,9 @@ void compare_row(const char* label, const Mesh& m, const Mesh& ref, double secon
 }
 
 void table_head(const char* ref) {
-    std::printf("| surface | triangles | mean distance to %s | Hausdorff | mean normal angle (°) | seconds | × extraction |\n", ref);
+    std::printf(
+        "| surface | triangles | mean distance to %s | Hausdorff | mean normal angle (°) | seconds | × extraction |\n",
+        ref);
     std::printf("|---|---|---|---|---|---|---|\n");
 }
 
@@ -142,7 +144,8 @@ void mri(const std::string& data) {
     const double t_read = since(t0);
     const auto [iso, base] = extract_timed(v);
     std::printf("Read and made a signed distance in %.2f s (%.1f × the extraction); grid %d × %d × %d, %s.\n\n", t_read,
-                t_read / base, v.grid.dims[0], v.grid.dims[1], v.grid.dims[2], info.placed ? "placed by its sform" : "axis-aligned");
+                t_read / base, v.grid.dims[0], v.grid.dims[1], v.grid.dims[2],
+                info.placed ? "placed by its sform" : "axis-aligned");
     table_head("the isosurface (mm)");
     compare_row("isosurface, extracted", iso, iso, base, base);
     for (const SmoothMode mode : {SmoothMode::Bilateral, SmoothMode::Isotropic}) {
@@ -151,8 +154,8 @@ void mri(const std::string& data) {
         o.smooth.mode = mode;
         t0 = Clock::now();
         const PipelineResult r = smooth_volume_input(w, o);
-        compare_row(mode == SmoothMode::Bilateral ? "default (bilateral), smoothed" : "isotropic, smoothed", r.mesh, iso,
-                    since(t0), base);
+        compare_row(mode == SmoothMode::Bilateral ? "default (bilateral), smoothed" : "isotropic, smoothed", r.mesh,
+                    iso, since(t0), base);
     }
 }
 
@@ -179,8 +182,10 @@ ScalarImage label_image(const Mesh& mesh, const std::array<Vec3d, 3>& u, const s
     for (int z = 0; z < im.dims[2]; ++z)
         for (int y = 0; y < im.dims[1]; ++y)
             for (int x = 0; x < im.dims[0]; ++x)
-                im.values[std::size_t(x) + std::size_t(im.dims[0]) * (std::size_t(y) + std::size_t(im.dims[1]) * std::size_t(z))] =
-                    phi.phi(im.origin + im.axes[0] * double(x) + im.axes[1] * double(y) + im.axes[2] * double(z), nullptr) < 0;
+                im.values[std::size_t(x) +
+                          std::size_t(im.dims[0]) * (std::size_t(y) + std::size_t(im.dims[1]) * std::size_t(z))] =
+                    phi.phi(im.origin + im.axes[0] * double(x) + im.axes[1] * double(y) + im.axes[2] * double(z),
+                            nullptr) < 0;
     return im;
 }
 
@@ -189,7 +194,8 @@ void label_map(const std::string& data) {
     std::printf("\n### A label map of the brain surface (0.9 × 0.9 × 1.5 mm, turned 20°)\n\n");
     const Mesh brain = read_mesh(path);
     const double a = 20 * std::numbers::pi / 180;
-    const std::array<Vec3d, 3> u{Vec3d{std::cos(a), std::sin(a), 0}, Vec3d{-std::sin(a), std::cos(a), 0}, Vec3d{0, 0, 1}};
+    const std::array<Vec3d, 3> u{Vec3d{std::cos(a), std::sin(a), 0}, Vec3d{-std::sin(a), std::cos(a), 0},
+                                 Vec3d{0, 0, 1}};
     const Volume v = image_to_volume(label_image(brain, u, {0.9, 0.9, 1.5}, 0.5), {.surface = {.label = 1.0}});
     const auto [stairs, base] = extract_timed(v);
     table_head("the original (mm)");
@@ -216,12 +222,16 @@ void label_map(const std::string& data) {
 /// spacing s × s × s and s × s × 2s; the mean normal angle to the model (degrees) of the extraction and of
 /// the bilateral default at 0.75, 1, 1.5 and 2 × the coarsest spacing.
 void length_study(const std::string& data) {
-    const std::vector<std::string> models{"pairs_gnf/fandisk_gt.ply", "pairs_gnf/block_gt.ply",     "pairs_gnf/twelve_gt.ply",
-                                          "pairs_gnf/trimstar_gt.ply", "pairs_gnf/sharpsphere_gt.ply",
-                                          "cad/wingnut.ply",          "organic/armadillo.ply",     "medical/brainmesh_icbm152_lh.ply"};
+    const std::vector<std::string> models{"pairs_gnf/fandisk_gt.ply",     "pairs_gnf/block_gt.ply",
+                                          "pairs_gnf/twelve_gt.ply",      "pairs_gnf/trimstar_gt.ply",
+                                          "pairs_gnf/sharpsphere_gt.ply", "cad/wingnut.ply",
+                                          "organic/armadillo.ply",        "medical/brainmesh_icbm152_lh.ply"};
     const std::vector<double> lengths{0.75, 1.0, 1.5, 2.0};
-    std::printf("\n### The length unit of a volume input, on label maps of the closed models (128 samples along the longest side)\n\n");
-    std::printf("Mean normal angle to the model (°); the bilateral default with its length unit L × the coarsest spacing.\n\n");
+    std::printf(
+        "\n### The length unit of a volume input, on label maps of the closed models (128 samples along the longest "
+        "side)\n\n");
+    std::printf(
+        "Mean normal angle to the model (°); the bilateral default with its length unit L × the coarsest spacing.\n\n");
     std::printf("| model | z spacing | extracted |");
     for (const double L : lengths) std::printf(" L = %.3g |", L);
     std::printf("\n|---|---|---|");
@@ -272,11 +282,15 @@ int main(int argc, char** argv) {
     int threads = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         const std::string k = argv[i];
-        if (k == "--data") data = argv[i + 1];
-        else if (k == "--threads") threads = std::atoi(argv[i + 1]);
-        else if (k == "--only") only = argv[i + 1];
+        if (k == "--data")
+            data = argv[i + 1];
+        else if (k == "--threads")
+            threads = std::atoi(argv[i + 1]);
+        else if (k == "--only")
+            only = argv[i + 1];
         else {
-            std::fprintf(stderr, "usage: nf_bench_volumes [--data DIR] [--threads N] [--only balls|mri|labels|study]\n");
+            std::fprintf(stderr,
+                         "usage: nf_bench_volumes [--data DIR] [--threads N] [--only balls|mri|labels|study]\n");
             return 2;
         }
     }

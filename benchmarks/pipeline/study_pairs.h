@@ -53,12 +53,12 @@ inline std::vector<Pair> find_pairs(const fs::path& data) {
                     p.published.emplace_back(published_label(rn), r);
             }
             if (stem == "julius_n0.2" && fs::exists(data / "pairs_nllr/julius_n2.nllr_result.ply"))
-                p.published.emplace_back(published_label(".nllr_result"), data / "pairs_nllr/julius_n2.nllr_result.ply");
+                p.published.emplace_back(published_label(".nllr_result"),
+                                         data / "pairs_nllr/julius_n2.nllr_result.ply");
             pairs.push_back(std::move(p));
         }
     }
     return pairs;
 }
-
 
 }  // namespace normalflow::bench

@@ -48,18 +48,18 @@ void check_options(const CleanupOptions& o) {
         bad("min_component_fraction must be in [0, 1)");
     if (o.distance_samples_per_face < 0) bad("distance_samples_per_face must be >= 0");
     switch (o.reduction) {
-    case CleanupReduction::None: break;
-    case CleanupReduction::FaceCount:
-        if (o.target_faces < 4) bad("target_faces must be >= 4, got " + std::to_string(o.target_faces));
-        break;
-    case CleanupReduction::ErrorBound:
-        if (!(o.max_error > 0.0) || !std::isfinite(o.max_error)) bad("max_error must be > 0");
-        break;
-    case CleanupReduction::Remesh:
-        if (!(o.target_edge_length > 0.0) || !std::isfinite(o.target_edge_length))
-            bad("target_edge_length must be > 0");
-        if (o.remesh_iterations < 1) bad("remesh_iterations must be >= 1");
-        break;
+        case CleanupReduction::None: break;
+        case CleanupReduction::FaceCount:
+            if (o.target_faces < 4) bad("target_faces must be >= 4, got " + std::to_string(o.target_faces));
+            break;
+        case CleanupReduction::ErrorBound:
+            if (!(o.max_error > 0.0) || !std::isfinite(o.max_error)) bad("max_error must be > 0");
+            break;
+        case CleanupReduction::Remesh:
+            if (!(o.target_edge_length > 0.0) || !std::isfinite(o.target_edge_length))
+                bad("target_edge_length must be > 0");
+            if (o.remesh_iterations < 1) bad("remesh_iterations must be >= 1");
+            break;
     }
 }
 
@@ -198,11 +198,22 @@ public:
 private:
     // Centroid first (the point most likely to be far), the points sampled_hausdorff uses, then the
     // rest of a step-1/4 barycentric grid (corners excluded; the other two corners are old points).
-    static constexpr double kFilterBary[][3] = {
-        {1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.6, 0.2, 0.2},   {0.2, 0.6, 0.2},   {0.2, 0.2, 0.6},   {0.5, 0.5, 0.0},
-        {0.0, 0.5, 0.5},             {0.5, 0.0, 0.5},   {0.5, 0.25, 0.25}, {0.25, 0.5, 0.25}, {0.25, 0.25, 0.5},
-        {0.75, 0.25, 0.0},           {0.25, 0.75, 0.0}, {0.0, 0.75, 0.25}, {0.0, 0.25, 0.75}, {0.75, 0.0, 0.25},
-        {0.25, 0.0, 0.75}};
+    static constexpr double kFilterBary[][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3},
+                                                {0.6, 0.2, 0.2},
+                                                {0.2, 0.6, 0.2},
+                                                {0.2, 0.2, 0.6},
+                                                {0.5, 0.5, 0.0},
+                                                {0.0, 0.5, 0.5},
+                                                {0.5, 0.0, 0.5},
+                                                {0.5, 0.25, 0.25},
+                                                {0.25, 0.5, 0.25},
+                                                {0.25, 0.25, 0.5},
+                                                {0.75, 0.25, 0.0},
+                                                {0.25, 0.75, 0.0},
+                                                {0.0, 0.75, 0.25},
+                                                {0.0, 0.25, 0.75},
+                                                {0.75, 0.0, 0.25},
+                                                {0.25, 0.0, 0.75}};
     bool near(const Vec3d& x, std::uint32_t& hint) const {
         const ClosestHit h = ref_->closest_within(x, max_sq_, hint);
         if (!h.found()) return false;
@@ -218,7 +229,8 @@ double mean_edge_length(const SM& sm) {
     double s = 0.0;
     std::size_t n = 0;
     for (auto e : sm.edges()) {
-        s += std::sqrt(CGAL::squared_distance(sm.point(sm.source(sm.halfedge(e))), sm.point(sm.target(sm.halfedge(e)))));
+        s +=
+            std::sqrt(CGAL::squared_distance(sm.point(sm.source(sm.halfedge(e))), sm.point(sm.target(sm.halfedge(e)))));
         ++n;
     }
     return n ? s / static_cast<double>(n) : 0.0;
@@ -239,8 +251,8 @@ CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt) {
 
     // 1. Small components (first, so that the reference surface for the distance is the kept part).
     if (opt.min_component_fraction > 0.0) {
-        const auto min_faces = static_cast<std::size_t>(
-            std::ceil(opt.min_component_fraction * static_cast<double>(sm.number_of_faces())));
+        const auto min_faces =
+            static_cast<std::size_t>(std::ceil(opt.min_component_fraction * static_cast<double>(sm.number_of_faces())));
         const auto [comps, faces] = remove_small_components(sm, min_faces);
         rep.components_removed = comps;
         rep.faces_in_removed_components = faces;
@@ -269,31 +281,32 @@ CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt) {
 
     // 4. Reduction.
     switch (opt.reduction) {
-    case CleanupReduction::None: break;
-    case CleanupReduction::FaceCount: {
-        // Count_stop_predicate counts edges: a closed triangle mesh has 3F/2 of them.
-        const std::size_t edges = opt.target_faces * 3 / 2;
-        if (sm.number_of_edges() > edges) {
-            SMS::Count_stop_predicate<SM> stop(edges);
-            SMS::Bounded_normal_change_filter<> filter;
+        case CleanupReduction::None: break;
+        case CleanupReduction::FaceCount: {
+            // Count_stop_predicate counts edges: a closed triangle mesh has 3F/2 of them.
+            const std::size_t edges = opt.target_faces * 3 / 2;
+            if (sm.number_of_edges() > edges) {
+                SMS::Count_stop_predicate<SM> stop(edges);
+                SMS::Bounded_normal_change_filter<> filter;
+                SMS::edge_collapse(sm, stop, CGAL::parameters::filter(filter));
+                sm.collect_garbage();
+            }
+            break;
+        }
+        case CleanupReduction::ErrorBound: {
+            SMS::Count_stop_predicate<SM> stop(0);
+            const auto query = make_bvh_query(reference);
+            SampledDistanceFilter filter(*query, opt.max_error);
             SMS::edge_collapse(sm, stop, CGAL::parameters::filter(filter));
             sm.collect_garbage();
+            break;
         }
-        break;
-    }
-    case CleanupReduction::ErrorBound: {
-        SMS::Count_stop_predicate<SM> stop(0);
-        const auto query = make_bvh_query(reference);
-        SampledDistanceFilter filter(*query, opt.max_error);
-        SMS::edge_collapse(sm, stop, CGAL::parameters::filter(filter));
-        sm.collect_garbage();
-        break;
-    }
-    case CleanupReduction::Remesh:
-        PMP::isotropic_remeshing(faces(sm), opt.target_edge_length, sm,
-                                 CGAL::parameters::number_of_iterations(static_cast<unsigned>(opt.remesh_iterations)));
-        sm.collect_garbage();
-        break;
+        case CleanupReduction::Remesh:
+            PMP::isotropic_remeshing(
+                faces(sm), opt.target_edge_length, sm,
+                CGAL::parameters::number_of_iterations(static_cast<unsigned>(opt.remesh_iterations)));
+            sm.collect_garbage();
+            break;
     }
 
     Mesh result = to_mesh(sm);
@@ -324,13 +337,14 @@ CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt) {
                 const bool within =
                     opt.reduction != CleanupReduction::ErrorBound ||
                     sampled_max_distance(candidate, reference, opt.distance_samples_per_face) <= opt.max_error;
-                if (!candidate.triangles.empty() && (b.closed || !a.closed) && (b.manifold || !a.manifold) &&
-                    within && count_self_intersections(candidate) < before)
+                if (!candidate.triangles.empty() && (b.closed || !a.closed) && (b.manifold || !a.manifold) && within &&
+                    count_self_intersections(candidate) < before)
                     result = std::move(candidate);
                 else
-                    rep.warnings.push_back(within ? "self-intersection repair made the mesh worse; kept the unrepaired mesh"
-                                                  : "self-intersection repair would exceed max_error; kept the "
-                                                    "unrepaired mesh");
+                    rep.warnings.push_back(
+                        within ? "self-intersection repair made the mesh worse; kept the unrepaired mesh"
+                               : "self-intersection repair would exceed max_error; kept the "
+                                 "unrepaired mesh");
             }
         }
     }

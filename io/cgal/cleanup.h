@@ -64,8 +64,8 @@ struct CleanupReport {
     std::size_t faces_after = 0;
     std::size_t vertices_before = 0;
     std::size_t vertices_after = 0;
-    std::size_t degenerate_removed = 0;   ///< faces removed by the degenerate/needle step
-    std::size_t components_removed = 0;   ///< small components dropped
+    std::size_t degenerate_removed = 0;  ///< faces removed by the degenerate/needle step
+    std::size_t components_removed = 0;  ///< small components dropped
     std::size_t faces_in_removed_components = 0;
     std::size_t components_reversed = 0;  ///< closed components turned outward
     /// Symmetric sampled Hausdorff distance, world units, between input and result (vertices plus
@@ -75,9 +75,9 @@ struct CleanupReport {
     double hausdorff = 0.0;
     double result_to_input = 0.0;
     double input_to_result = 0.0;
-    bool closed = false;                    ///< result has no boundary edge
-    bool manifold = false;                  ///< result has no non-manifold edge or vertex
-    std::size_t self_intersections = 0;     ///< pairs of intersecting faces in the result
+    bool closed = false;                       ///< result has no boundary edge
+    bool manifold = false;                     ///< result has no non-manifold edge or vertex
+    std::size_t self_intersections = 0;        ///< pairs of intersecting faces in the result
     std::size_t self_intersections_found = 0;  ///< pairs before the self-intersection repair (0 if off)
     double seconds = 0.0;
     /// Problems of the result, e.g. "result is not closed (12 boundary edges)".
@@ -104,7 +104,7 @@ CleanupReport cleanup_mesh(Mesh& m, const CleanupOptions& opt = {});
 
 /// The sampled Hausdorff distance (lib/metrics/surface_distance.h), also under this namespace.
 using normalflow::sampled_hausdorff;
-using normalflow::SampledDistance;
 using normalflow::sampled_max_distance;
+using normalflow::SampledDistance;
 
 }  // namespace normalflow::cgal

@@ -25,7 +25,9 @@ using Point = K::Point_3;
 using Poly = std::array<std::size_t, 3>;
 
 template <class T>
-bool collapsed(const T& t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
+bool collapsed(const T& t) {
+    return t[0] == t[1] || t[1] == t[2] || t[0] == t[2];
+}
 
 /// Undirected edges of the non-collapsed faces: (min, max, face, reversed), sorted by edge then face.
 struct Edge {
@@ -65,7 +67,7 @@ std::size_t count_self_intersections(const Mesh& mesh) {
     const auto& T = m.triangles;
 
     using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t,
-                                                           CGAL::Box_intersection_d::ID_FROM_BOX_ADDRESS>;
+                                                          CGAL::Box_intersection_d::ID_FROM_BOX_ADDRESS>;
     std::vector<Box> boxes;
     boxes.reserve(T.size());
     for (std::size_t f = 0; f < T.size(); ++f) {
@@ -223,8 +225,10 @@ RepairReport repair_mesh(Mesh& m, const RepairOptions& opt) {
         }
         for (std::size_t r = 0; r < polys.size(); ++r) {
             if (!is_root[r]) continue;
-            if (patch_open[r]) ++rep.open_patches;
-            else if (vol[r] < 0) ++rep.patches_inverted;
+            if (patch_open[r])
+                ++rep.open_patches;
+            else if (vol[r] < 0)
+                ++rep.patches_inverted;
         }
         for (std::size_t f = 0; f < polys.size(); ++f) {
             if (collapsed(polys[f])) continue;
@@ -242,8 +246,8 @@ RepairReport repair_mesh(Mesh& m, const RepairOptions& opt) {
 
     m.positions.resize(pts.size());
     for (std::size_t i = 0; i < pts.size(); ++i)
-        m.positions[i] = Vec3f(static_cast<float>(pts[i].x()), static_cast<float>(pts[i].y()),
-                               static_cast<float>(pts[i].z()));
+        m.positions[i] =
+            Vec3f(static_cast<float>(pts[i].x()), static_cast<float>(pts[i].y()), static_cast<float>(pts[i].z()));
     m.triangles.resize(polys.size());
     for (std::size_t f = 0; f < polys.size(); ++f)
         m.triangles[f] = {static_cast<std::uint32_t>(polys[f][0]), static_cast<std::uint32_t>(polys[f][1]),

@@ -52,9 +52,9 @@ struct RepairReport {
     /// consistently within each manifold patch and the vertices are NOT split (the mesh keeps its
     /// indexing). True when orientation was not requested.
     bool orientable = true;
-    std::size_t patches_inverted = 0;    ///< closed patches turned outward (their faces reversed)
-    std::size_t open_patches = 0;        ///< patches not closed: their outward side is not defined
-    std::vector<std::string> warnings;   ///< e.g. "3 open patches: outward orientation not defined"
+    std::size_t patches_inverted = 0;   ///< closed patches turned outward (their faces reversed)
+    std::size_t open_patches = 0;       ///< patches not closed: their outward side is not defined
+    std::vector<std::string> warnings;  ///< e.g. "3 open patches: outward orientation not defined"
 };
 
 /// Repairs a polygon soup, modified in place: merges duplicate points, removes degenerate and

@@ -23,9 +23,9 @@
 #include <vector>
 
 #include "core/errors.h"
-#include "io/util/atomic_file.h"
-#include "io/formats/gltf.h"
 #include "io/draco/gltf_check.h"
+#include "io/formats/gltf.h"
+#include "io/util/atomic_file.h"
 #include "io/util/isolate.h"
 
 namespace normalflow {
@@ -126,8 +126,8 @@ Rgba8 read_color(const draco::PointAttribute& a, draco::AttributeValueIndex i, C
 Mesh to_mesh(const draco::Mesh& dm, const std::string& who, ColorSpace colors) {
     const draco::PointAttribute* pa = dm.GetNamedAttribute(draco::GeometryAttribute::POSITION);
     if (!pa) throw InvalidInput(who + ": no POSITION attribute");
-    if (pa->num_components() < 3) throw InvalidInput(who + ": POSITION has " + std::to_string(pa->num_components()) +
-                                                     " components, expected 3");
+    if (pa->num_components() < 3)
+        throw InvalidInput(who + ": POSITION has " + std::to_string(pa->num_components()) + " components, expected 3");
     if (dm.num_faces() == 0) throw InvalidInput(who + ": no triangles (point cloud or non-triangle primitives)");
     const draco::PointAttribute* na = dm.GetNamedAttribute(draco::GeometryAttribute::NORMAL);
     const draco::PointAttribute* ca = dm.GetNamedAttribute(draco::GeometryAttribute::COLOR);
@@ -196,7 +196,8 @@ void check_options(const DracoOptions& opt, const std::string& who) {
     if (opt.texcoord_bits < 1 || opt.texcoord_bits > 30)
         throw InvalidInput(who + ": texcoord_bits " + std::to_string(opt.texcoord_bits) + " out of range [1, 30]");
     if (opt.compression_level < 0 || opt.compression_level > 10)
-        throw InvalidInput(who + ": compression_level " + std::to_string(opt.compression_level) + " out of range [0, 10]");
+        throw InvalidInput(who + ": compression_level " + std::to_string(opt.compression_level) +
+                           " out of range [0, 10]");
 }
 
 /// Builds a Draco mesh from m (validated) with its attributes, with equal points merged.
@@ -205,8 +206,10 @@ std::unique_ptr<draco::Mesh> to_draco(const Mesh& m, const std::string& who, boo
     const std::size_t nv = m.positions.size(), nf = m.triangles.size();
     check_mesh(m, who);
     if (nv == 0 || nf == 0)
-        throw InvalidInput(who + ": empty mesh (" + std::to_string(nv) + " points, " + std::to_string(nf) + " triangles)");
-    if (nv > std::size_t(std::numeric_limits<std::int32_t>::max()) || nf > std::size_t(std::numeric_limits<std::int32_t>::max()))
+        throw InvalidInput(who + ": empty mesh (" + std::to_string(nv) + " points, " + std::to_string(nf) +
+                           " triangles)");
+    if (nv > std::size_t(std::numeric_limits<std::int32_t>::max()) ||
+        nf > std::size_t(std::numeric_limits<std::int32_t>::max()))
         throw InvalidInput(who + ": mesh too large for Draco");
     auto dm = std::make_unique<draco::Mesh>();
     dm->set_num_points(std::uint32_t(nv));
@@ -248,12 +251,14 @@ std::unique_ptr<draco::Mesh> to_draco(const Mesh& m, const std::string& who, boo
     // glTF's linear colours are stored as floats, quantised by Draco to kLinearColorBits: 8 linear bits
     // would merge the dark sRGB shades (sRGB 0..12 all fall on linear 0..1/255).
     if (m.has_colors() && linear_colors)
-        add(draco::GeometryAttribute::COLOR, 4, draco::DT_FLOAT32, false, 16, [&](draco::PointAttribute* a, std::size_t i) {
-            const Rgba8 c = m.colors[i];
-            float v[4];
-            for (std::size_t k = 0; k < 4; ++k) v[k] = k < 3 ? srgb_to_linear(float(c[k]) / 255.0f) : float(c[k]) / 255.0f;
-            a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), v);
-        });
+        add(draco::GeometryAttribute::COLOR, 4, draco::DT_FLOAT32, false, 16,
+            [&](draco::PointAttribute* a, std::size_t i) {
+                const Rgba8 c = m.colors[i];
+                float v[4];
+                for (std::size_t k = 0; k < 4; ++k)
+                    v[k] = k < 3 ? srgb_to_linear(float(c[k]) / 255.0f) : float(c[k]) / 255.0f;
+                a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), v);
+            });
     else if (m.has_colors())
         add(draco::GeometryAttribute::COLOR, 4, draco::DT_UINT8, true, 4, [&](draco::PointAttribute* a, std::size_t i) {
             a->SetAttributeValue(draco::AttributeValueIndex(std::uint32_t(i)), m.colors[i].data());
@@ -328,7 +333,8 @@ std::string draco_glb_with_fallback(const draco::Mesh& dm, const DracoOptions& o
     std::string bin(enc.data(), enc.size());
     while (bin.size() % 4) bin.push_back('\0');
     const std::size_t pos_off = bin.size();
-    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
+    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                   std::numeric_limits<float>::max()};
     float hi[3] = {-lo[0], -lo[1], -lo[2]};
     for (std::uint32_t p = 0; p < np; ++p) {
         float xyz[3];
@@ -351,7 +357,12 @@ std::string draco_glb_with_fallback(const draco::Mesh& dm, const DracoOptions& o
     int next = 1;  // accessor index; its buffer view is next + 1
     // The optional attributes, decoded as the Draco decoder yields them: NORMAL and TEXCOORD_0 as float,
     // COLOR_0 as float (the linear values write_draco_glb gives Draco).
-    struct Extra { draco::GeometryAttribute::Type type; const char* name; const char* vec; int comps; };
+    struct Extra {
+        draco::GeometryAttribute::Type type;
+        const char* name;
+        const char* vec;
+        int comps;
+    };
     for (const Extra e : {Extra{draco::GeometryAttribute::NORMAL, "NORMAL", "VEC3", 3},
                           Extra{draco::GeometryAttribute::COLOR, "COLOR_0", "VEC4", 4},
                           Extra{draco::GeometryAttribute::TEX_COORD, "TEXCOORD_0", "VEC2", 2}}) {
@@ -367,9 +378,8 @@ std::string draco_glb_with_fallback(const draco::Mesh& dm, const DracoOptions& o
         ++next;
         attributes += ",\"" + std::string(e.name) + "\":" + std::to_string(next - 1);
         draco_ids += ",\"" + std::string(e.name) + "\":" + std::to_string(a->unique_id());
-        accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":)" +
-                     "5126" + R"(,"count":)" + std::to_string(np) +
-                     R"(,"type":")" + e.vec + "\"}";
+        accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":)" + "5126" + R"(,"count":)" +
+                     std::to_string(np) + R"(,"type":")" + e.vec + "\"}";
         views += R"(,{"buffer":0,"byteOffset":)" + std::to_string(off) + R"(,"byteLength":)" +
                  std::to_string(bin.size() - off) + R"(,"target":34962})";
     }

@@ -58,7 +58,8 @@ private:
         throw InvalidInput(who_ + ": glTF JSON, byte " + std::to_string(pos_) + ": " + what);
     }
     void skip_ws() {
-        while (pos_ < s_.size() && (s_[pos_] == ' ' || s_[pos_] == '\t' || s_[pos_] == '\n' || s_[pos_] == '\r')) ++pos_;
+        while (pos_ < s_.size() && (s_[pos_] == ' ' || s_[pos_] == '\t' || s_[pos_] == '\n' || s_[pos_] == '\r'))
+            ++pos_;
     }
     bool eat(char c) {
         skip_ws();
@@ -117,8 +118,10 @@ private:
             const char* b = s_.data() + pos_;
             const char* e = s_.data() + s_.size();
             const auto r = std::from_chars(b, e, v.num);
-            if (r.ec == std::errc::result_out_of_range) v.num = std::numeric_limits<double>::infinity();
-            else if (r.ec != std::errc()) fail("bad number");
+            if (r.ec == std::errc::result_out_of_range)
+                v.num = std::numeric_limits<double>::infinity();
+            else if (r.ec != std::errc())
+                fail("bad number");
             pos_ += std::size_t(r.ptr - b);
         } else {
             fail(std::string("unexpected character '") + (c >= 32 && c < 127 ? std::string(1, c) : "?") + "'");
@@ -141,7 +144,9 @@ private:
             if (pos_ >= s_.size()) fail("unterminated string");
             const char e = s_[pos_++];
             switch (e) {
-                case '"': case '\\': case '/': out.push_back(e); break;
+                case '"':
+                case '\\':
+                case '/': out.push_back(e); break;
                 case 'b': out.push_back('\b'); break;
                 case 'f': out.push_back('\f'); break;
                 case 'n': out.push_back('\n'); break;
@@ -153,15 +158,22 @@ private:
                     for (int k = 0; k < 4; ++k) {
                         const char h = s_[pos_++];
                         cp <<= 4;
-                        if (h >= '0' && h <= '9') cp |= unsigned(h - '0');
-                        else if (h >= 'a' && h <= 'f') cp |= unsigned(h - 'a' + 10);
-                        else if (h >= 'A' && h <= 'F') cp |= unsigned(h - 'A' + 10);
-                        else fail("bad \\u escape");
+                        if (h >= '0' && h <= '9')
+                            cp |= unsigned(h - '0');
+                        else if (h >= 'a' && h <= 'f')
+                            cp |= unsigned(h - 'a' + 10);
+                        else if (h >= 'A' && h <= 'F')
+                            cp |= unsigned(h - 'A' + 10);
+                        else
+                            fail("bad \\u escape");
                     }
                     // UTF-8 (surrogates are kept as-is: names only need to compare equal).
-                    if (cp < 0x80) out.push_back(char(cp));
-                    else if (cp < 0x800) out += {char(0xC0 | (cp >> 6)), char(0x80 | (cp & 0x3F))};
-                    else out += {char(0xE0 | (cp >> 12)), char(0x80 | ((cp >> 6) & 0x3F)), char(0x80 | (cp & 0x3F))};
+                    if (cp < 0x80)
+                        out.push_back(char(cp));
+                    else if (cp < 0x800)
+                        out += {char(0xC0 | (cp >> 6)), char(0x80 | (cp & 0x3F))};
+                    else
+                        out += {char(0xE0 | (cp >> 12)), char(0x80 | ((cp >> 6) & 0x3F)), char(0x80 | (cp & 0x3F))};
                     break;
                 }
                 default: fail("bad escape in a string");
@@ -174,7 +186,8 @@ private:
 
 class Checker {
 public:
-    Checker(const JValue& root, std::optional<std::string_view> bin, const std::string& base_dir, const std::string& who)
+    Checker(const JValue& root, std::optional<std::string_view> bin, const std::string& base_dir,
+            const std::string& who)
         : root_(root), bin_(bin), base_dir_(base_dir), who_(who) {}
 
     void run() {
@@ -215,8 +228,9 @@ private:
         return &v->items;
     }
     /// An integer member in [lo, hi]; `def` if absent (or fails if def is nullopt).
-    std::uint64_t integer(const JValue& obj, std::string_view key, const std::string& where, std::optional<std::uint64_t> def,
-                          std::uint64_t lo = 0, std::uint64_t hi = (std::uint64_t(1) << 53)) const {
+    std::uint64_t integer(const JValue& obj, std::string_view key, const std::string& where,
+                          std::optional<std::uint64_t> def, std::uint64_t lo = 0,
+                          std::uint64_t hi = (std::uint64_t(1) << 53)) const {
         const JValue* v = obj.get(key);
         if (!v) {
             if (!def) fail(where + ": missing \"" + std::string(key) + "\"");
@@ -253,13 +267,20 @@ private:
         int bits = 0;
         for (char c : s) {
             int d;
-            if (c >= 'A' && c <= 'Z') d = c - 'A';
-            else if (c >= 'a' && c <= 'z') d = c - 'a' + 26;
-            else if (c >= '0' && c <= '9') d = c - '0' + 52;
-            else if (c == '+' || c == '-') d = 62;
-            else if (c == '/' || c == '_') d = 63;
-            else if (c == '=') break;
-            else return std::nullopt;
+            if (c >= 'A' && c <= 'Z')
+                d = c - 'A';
+            else if (c >= 'a' && c <= 'z')
+                d = c - 'a' + 26;
+            else if (c >= '0' && c <= '9')
+                d = c - '0' + 52;
+            else if (c == '+' || c == '-')
+                d = 62;
+            else if (c == '/' || c == '_')
+                d = 63;
+            else if (c == '=')
+                break;
+            else
+                return std::nullopt;
             acc = (acc << 6) | unsigned(d);
             bits += 6;
             if (bits >= 8) {
@@ -317,8 +338,8 @@ private:
                 data = buffer_data_[i];
             }
             if (data.size() < len)
-                fail(where + ": byteLength " + std::to_string(len) + " but its data has only " + std::to_string(data.size()) +
-                     " bytes");
+                fail(where + ": byteLength " + std::to_string(len) + " but its data has only " +
+                     std::to_string(data.size()) + " bytes");
             buffer_bytes_.push_back(data);
         }
     }
@@ -347,9 +368,12 @@ private:
 
     static std::uint64_t component_size(std::uint64_t ct) {
         switch (ct) {
-            case 5120: case 5121: return 1;
-            case 5122: case 5123: return 2;
-            case 5125: case 5126: return 4;
+            case 5120:
+            case 5121: return 1;
+            case 5122:
+            case 5123: return 2;
+            case 5125:
+            case 5126: return 4;
             default: return 0;
         }
     }
@@ -369,14 +393,22 @@ private:
             if (!t || t->type != JValue::Type::String) fail(where + ": missing \"type\"");
             x.type = t->str;
             std::uint64_t cols = 1, rows = 0;
-            if (x.type == "SCALAR") rows = 1;
-            else if (x.type == "VEC2") rows = 2;
-            else if (x.type == "VEC3") rows = 3;
-            else if (x.type == "VEC4") rows = 4;
-            else if (x.type == "MAT2") rows = cols = 2;
-            else if (x.type == "MAT3") rows = cols = 3;
-            else if (x.type == "MAT4") rows = cols = 4;
-            else fail(where + ": type \"" + x.type + "\" is not valid");
+            if (x.type == "SCALAR")
+                rows = 1;
+            else if (x.type == "VEC2")
+                rows = 2;
+            else if (x.type == "VEC3")
+                rows = 3;
+            else if (x.type == "VEC4")
+                rows = 4;
+            else if (x.type == "MAT2")
+                rows = cols = 2;
+            else if (x.type == "MAT3")
+                rows = cols = 3;
+            else if (x.type == "MAT4")
+                rows = cols = 4;
+            else
+                fail(where + ": type \"" + x.type + "\" is not valid");
             // Matrix columns start on 4-byte boundaries (glTF 2.0, 3.6.2.4).
             x.elem = cols == 1 ? rows * x.comp : cols * ((rows * x.comp + 3) / 4 * 4);
             x.count = integer(a, "count", where, std::nullopt, 1, std::uint64_t(1) << 40);
@@ -389,8 +421,8 @@ private:
                 const std::uint64_t need = x.offset + (x.count - 1) * stride + x.elem;
                 if (need > w.length)
                     fail(where + ": count " + std::to_string(x.count) + " with stride " + std::to_string(stride) +
-                         " needs " + std::to_string(need) + " bytes from byte 0, but bufferView " + std::to_string(x.view) +
-                         " has " + std::to_string(w.length));
+                         " needs " + std::to_string(need) + " bytes from byte 0, but bufferView " +
+                         std::to_string(x.view) + " has " + std::to_string(w.length));
             }
             if (const JValue* sp = a.get("sparse")) {
                 object(*sp, where + " sparse");
@@ -454,7 +486,8 @@ private:
                     object(*at, where + " KHR_draco_mesh_compression attributes");
                     for (std::size_t k = 0; k < at->keys.size(); ++k) {
                         const JValue& id = at->items[k];
-                        if (id.type != JValue::Type::Number || id.num < 0 || id.num > 1e9 || id.num != std::floor(id.num))
+                        if (id.type != JValue::Type::Number || id.num < 0 || id.num > 1e9 ||
+                            id.num != std::floor(id.num))
                             fail(where + ": Draco attribute id of " + at->keys[k] + " is not a non-negative integer");
                     }
                 }
@@ -482,14 +515,16 @@ private:
                 const auto ia = index(p, "indices", where, "accessors");
                 if (!ia || draco) continue;
                 const Accessor& x = acc_[*ia];
-                if (x.type != "SCALAR" || (x.component_type != 5121 && x.component_type != 5123 && x.component_type != 5125))
-                    fail(where + ": indices accessor " + std::to_string(*ia) + " is not SCALAR unsigned byte/short/int");
+                if (x.type != "SCALAR" ||
+                    (x.component_type != 5121 && x.component_type != 5123 && x.component_type != 5125))
+                    fail(where + ": indices accessor " + std::to_string(*ia) +
+                         " is not SCALAR unsigned byte/short/int");
                 if (!x.has_view) fail(where + ": indices accessor " + std::to_string(*ia) + " has no bufferView");
                 for (std::uint64_t k = 0; k < x.count; ++k) {
                     const std::uint64_t v = read_index(x, k);
                     if (v >= *vertices)
-                        fail(where + ": index " + std::to_string(k) + " is " + std::to_string(v) + ", but POSITION has " +
-                             std::to_string(*vertices) + " elements");
+                        fail(where + ": index " + std::to_string(k) + " is " + std::to_string(v) +
+                             ", but POSITION has " + std::to_string(*vertices) + " elements");
                 }
             }
         }
@@ -506,11 +541,13 @@ private:
                 index(nd, "mesh", where, "meshes");
                 if (const auto* ch = array(nd, "children", where + ": ")) {
                     for (const JValue& c : *ch) {
-                        if (c.type != JValue::Type::Number || c.num < 0 || c.num >= double(n) || c.num != std::floor(c.num))
+                        if (c.type != JValue::Type::Number || c.num < 0 || c.num >= double(n) ||
+                            c.num != std::floor(c.num))
                             fail(where + ": a child is not an existing node");
                         const auto k = std::size_t(c.num);
                         if (parent[k] >= 0 || k == i)
-                            fail(where + ": node " + std::to_string(k) + " has more than one parent (or is its own child)");
+                            fail(where + ": node " + std::to_string(k) +
+                                 " has more than one parent (or is its own child)");
                         parent[k] = std::int64_t(i);
                     }
                 }
@@ -538,7 +575,8 @@ private:
                 object((*ss)[i], where);
                 if (const auto* nodes = array((*ss)[i], "nodes", where + ": "))
                     for (const JValue& c : *nodes)
-                        if (c.type != JValue::Type::Number || c.num < 0 || c.num >= double(n) || c.num != std::floor(c.num))
+                        if (c.type != JValue::Type::Number || c.num < 0 || c.num >= double(n) ||
+                            c.num != std::floor(c.num))
                             fail(where + ": a root is not an existing node");
             }
         }

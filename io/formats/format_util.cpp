@@ -1,7 +1,7 @@
 #include "io/formats/format_util.h"
 
-#include "io/util/atomic_file.h"
 #include "core/errors.h"
+#include "io/util/atomic_file.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -55,8 +55,9 @@ void validate_mesh_for_write(const Mesh& m, std::string_view who, std::string_vi
     for (std::size_t i = 0; i < m.triangles.size(); ++i)
         for (const std::uint32_t v : m.triangles[i])
             if (v >= nv)
-                fail(who, name, "triangle " + std::to_string(i) + " has vertex index " + std::to_string(v) +
-                                    ", but the mesh has " + std::to_string(nv) + " vertices");
+                fail(who, name,
+                     "triangle " + std::to_string(i) + " has vertex index " + std::to_string(v) +
+                         ", but the mesh has " + std::to_string(nv) + " vertices");
     try {
         check_mesh(m, "");  // attribute sizes and finiteness
     } catch (const InvalidInput& e) {

@@ -17,7 +17,9 @@
 #include "core/errors.h"
 #include "core/mesh.h"
 
-namespace normalflow { class AtomicFile; }
+namespace normalflow {
+class AtomicFile;
+}
 
 namespace normalflow::detail {
 

@@ -16,7 +16,7 @@ namespace normalflow {
 
 namespace {
 
-constexpr std::uint32_t kGlbMagic = 0x46546C67;  // "glTF"
+constexpr std::uint32_t kGlbMagic = 0x46546C67;   // "glTF"
 constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
 constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
 
@@ -45,10 +45,10 @@ std::string float_text(float x) {
 void write_glb(const std::string& path, const Mesh& m) {
     const std::string who = "write_glb: " + path;
     const std::size_t nv = m.positions.size(), nf = m.triangles.size();
-    if (nv == 0 || nf == 0) throw InvalidInput(who + ": empty mesh (" + std::to_string(nv) + " points, " +
-                                               std::to_string(nf) + " triangles)");
-    Vec3f lo{std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
-             std::numeric_limits<float>::max()};
+    if (nv == 0 || nf == 0)
+        throw InvalidInput(who + ": empty mesh (" + std::to_string(nv) + " points, " + std::to_string(nf) +
+                           " triangles)");
+    Vec3f lo{std::numeric_limits<float>::max(), std::numeric_limits<float>::max(), std::numeric_limits<float>::max()};
     Vec3f hi = -lo;
     for (std::size_t i = 0; i < nv; ++i) {
         const Vec3f& p = m.positions[i];
@@ -70,9 +70,9 @@ void write_glb(const std::string& path, const Mesh& m) {
     std::uint64_t offset = std::uint64_t(nv) * 12;
     int next = 1;  // accessor and buffer view index
     views = R"({"buffer":0,"byteOffset":0,"byteLength":)" + std::to_string(offset) + R"(,"target":34962})";
-    accessors = R"({"bufferView":0,"componentType":5126,"count":)" + std::to_string(nv) +
-                R"(,"type":"VEC3","min":[)" + float_text(lo.x) + "," + float_text(lo.y) + "," + float_text(lo.z) +
-                "],\"max\":[" + float_text(hi.x) + "," + float_text(hi.y) + "," + float_text(hi.z) + "]}";
+    accessors = R"({"bufferView":0,"componentType":5126,"count":)" + std::to_string(nv) + R"(,"type":"VEC3","min":[)" +
+                float_text(lo.x) + "," + float_text(lo.y) + "," + float_text(lo.z) + "],\"max\":[" + float_text(hi.x) +
+                "," + float_text(hi.y) + "," + float_text(hi.z) + "]}";
     const auto add = [&](const char* name, const char* type, int comps, auto&& value) {
         const std::size_t first = attr.size();
         for (std::size_t i = 0; i < nv; ++i)
@@ -99,9 +99,8 @@ void write_glb(const std::string& path, const Mesh& m) {
             return c == 3 ? x : srgb_to_linear(x);
         });
     if (m.has_texcoords())
-        add("TEXCOORD_0", "VEC2", 2, [&](std::size_t i, int c) {
-            return c == 0 ? m.texcoords[i][0] : 1.0f - m.texcoords[i][1];
-        });
+        add("TEXCOORD_0", "VEC2", 2,
+            [&](std::size_t i, int c) { return c == 0 ? m.texcoords[i][0] : 1.0f - m.texcoords[i][1]; });
     const std::uint64_t idx_bytes = std::uint64_t(nf) * 12;
     accessors += R"(,{"bufferView":)" + std::to_string(next) + R"(,"componentType":5125,"count":)" +
                  std::to_string(3 * std::uint64_t(nf)) + R"(,"type":"SCALAR"})";
@@ -112,8 +111,8 @@ void write_glb(const std::string& path, const Mesh& m) {
     std::string json;
     json.reserve(1024);
     json += R"({"asset":{"version":"2.0","generator":"normalflow"},"scene":0,"scenes":[{"nodes":[0]}],)";
-    json += R"("nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{)" + attributes +
-            R"(},"indices":)" + std::to_string(next) + R"(,"material":0,"mode":4}]}],)";
+    json += R"("nodes":[{"mesh":0}],"meshes":[{"primitives":[{"attributes":{)" + attributes + R"(},"indices":)" +
+            std::to_string(next) + R"(,"material":0,"mode":4}]}],)";
     json += std::string(R"("materials":[)") + kGltfMaterial + "],";
     json += R"("accessors":[)" + accessors + "],";
     json += R"("bufferViews":[)" + views + "],";
@@ -141,7 +140,10 @@ void write_glb(const std::string& path, const Mesh& m) {
     } else {
         std::vector<std::uint32_t> buf;
         buf.reserve(3 * 4096);
-        auto flush = [&] { f.write(buf.data(), buf.size() * 4); buf.clear(); };
+        auto flush = [&] {
+            f.write(buf.data(), buf.size() * 4);
+            buf.clear();
+        };
         auto put = [&](std::uint32_t v) {
             buf.push_back(to_le(v));
             if (buf.size() >= 3 * 4096) flush();
@@ -156,9 +158,7 @@ void write_glb(const std::string& path, const Mesh& m) {
     f.commit();
 }
 
-float srgb_to_linear(float c) {
-    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
-}
+float srgb_to_linear(float c) { return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f); }
 
 float linear_to_srgb(float c) {
     c = std::clamp(c, 0.0f, 1.0f);

@@ -78,25 +78,31 @@ const char* datatype_name(int code) {
 
 std::size_t datatype_bytes(int code) {
     switch (code) {
-        case 2: case 256: return 1;
-        case 4: case 512: return 2;
-        case 8: case 16: case 768: return 4;
-        case 64: case 1024: case 1280: return 8;
+        case 2:
+        case 256: return 1;
+        case 4:
+        case 512: return 2;
+        case 8:
+        case 16:
+        case 768: return 4;
+        case 64:
+        case 1024:
+        case 1280: return 8;
         default: return 0;  // not supported
     }
 }
 
 /// The fields of either header version that the reader uses, as doubles and int64s.
 struct Header {
-    int version = 1;           // 1 or 2
-    std::size_t size = 348;    // header bytes
+    int version = 1;         // 1 or 2
+    std::size_t size = 348;  // header bytes
     std::int64_t dim[8]{};
     int datatype = 0;
     double pixdim[8]{};
     double vox_offset = 0;
     double slope = 0, inter = 0;
     int qform_code = 0, sform_code = 0;
-    double quat[3]{};          // b, c, d
+    double quat[3]{};  // b, c, d
     double qoffset[3]{};
     double srow[3][4]{};
 };
@@ -129,9 +135,7 @@ public:
 
 private:
     [[noreturn]] void bad(const std::string& what) const { throw InvalidInput("read_nifti: " + path_ + ": " + what); }
-    [[noreturn]] void io_error(const std::string& what) const {
-        throw IoError("read_nifti: " + path_ + ": " + what);
-    }
+    [[noreturn]] void io_error(const std::string& what) const { throw IoError("read_nifti: " + path_ + ": " + what); }
 
     void open();
     /// Reads up to n bytes; returns how many were read (fewer only at the end of the data).
@@ -200,8 +204,9 @@ std::size_t Reader::read_some(void* dst, std::size_t n) {
                 const char* msg = gzerror(gz_, &err);
                 if (err == Z_ERRNO) io_error(std::string("read error (") + std::strerror(errno) + ")");
                 if (err != Z_OK)
-                    bad("truncated or corrupt gzip data after " + std::to_string(pos_ + got + (r > 0 ? unsigned(r) : 0u)) +
-                        " decompressed bytes (" + (msg ? msg : "zlib error") + ")");
+                    bad("truncated or corrupt gzip data after " +
+                        std::to_string(pos_ + got + (r > 0 ? unsigned(r) : 0u)) + " decompressed bytes (" +
+                        (msg ? msg : "zlib error") + ")");
                 if (r > 0) got += unsigned(r);
                 break;  // the stream ended
             }
@@ -217,7 +222,8 @@ void Reader::skip_to(std::uint64_t offset) {
     if (offset == pos_) return;
     if (!gzip_) {
         // The caller has checked offset against the file size.
-        if (fseeko(f_, off_t(offset), SEEK_SET) != 0) io_error(std::string("cannot seek (") + std::strerror(errno) + ")");
+        if (fseeko(f_, off_t(offset), SEEK_SET) != 0)
+            io_error(std::string("cannot seek (") + std::strerror(errno) + ")");
         pos_ = offset;
         return;
     }
@@ -225,7 +231,8 @@ void Reader::skip_to(std::uint64_t offset) {
     while (pos_ < offset) {
         const std::size_t n = std::size_t(std::min<std::uint64_t>(offset - pos_, scratch.size()));
         if (read_some(scratch.data(), n) != n)
-            bad("truncated file: it ends at byte " + std::to_string(pos_) + ", before vox_offset " + std::to_string(offset));
+            bad("truncated file: it ends at byte " + std::to_string(pos_) + ", before vox_offset " +
+                std::to_string(offset));
     }
 }
 
@@ -234,7 +241,8 @@ Header Reader::parse_header() {
     std::memset(h, 0, sizeof h);
     {
         const std::size_t got = read_some(h, 4);
-        if (got < 4) bad("truncated header (the file holds " + std::to_string(got) + " bytes, a NIfTI header 348 or 540)");
+        if (got < 4)
+            bad("truncated header (the file holds " + std::to_string(got) + " bytes, a NIfTI header 348 or 540)");
     }
     Header hd;
     const std::int32_t native = field<std::int32_t>(h, 0, false);
@@ -244,7 +252,8 @@ Header Reader::parse_header() {
     } else if (swapped == 348 || swapped == 540) {
         swap_ = true;
     } else {
-        bad("not a NIfTI file (sizeof_hdr is " + std::to_string(native) + ", expected 348 for NIfTI-1 or 540 for NIfTI-2)");
+        bad("not a NIfTI file (sizeof_hdr is " + std::to_string(native) +
+            ", expected 348 for NIfTI-1 or 540 for NIfTI-2)");
     }
     const std::int32_t size = swap_ ? swapped : native;
     hd.version = size == 348 ? 1 : 2;
@@ -261,7 +270,8 @@ Header Reader::parse_header() {
             bad("a NIfTI-1 header/image pair (magic \"ni1\": the samples are in a separate .img file); "
                 "only single files (.nii, magic \"n+1\") are read");
         if (std::memcmp(m, "n+1\0", 4) != 0)
-            bad("not a NIfTI-1 file (magic \"" + shown_bytes(m, 4) + "\" at byte 344, expected \"n+1\"; "
+            bad("not a NIfTI-1 file (magic \"" + shown_bytes(m, 4) +
+                "\" at byte 344, expected \"n+1\"; "
                 "Analyze 7.5 files are not read)");
         for (int i = 0; i < 8; ++i) hd.dim[i] = field<std::int16_t>(h, 40 + 2 * std::size_t(i), s);
         hd.datatype = field<std::int16_t>(h, 70, s);
@@ -274,14 +284,16 @@ Header Reader::parse_header() {
         for (int i = 0; i < 3; ++i) hd.quat[i] = field<float>(h, 256 + 4 * std::size_t(i), s);
         for (int i = 0; i < 3; ++i) hd.qoffset[i] = field<float>(h, 268 + 4 * std::size_t(i), s);
         for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 4; ++c) hd.srow[r][c] = field<float>(h, 280 + 16 * std::size_t(r) + 4 * std::size_t(c), s);
+            for (int c = 0; c < 4; ++c)
+                hd.srow[r][c] = field<float>(h, 280 + 16 * std::size_t(r) + 4 * std::size_t(c), s);
     } else {
         const unsigned char* m = h + 4;
         if (std::memcmp(m, "ni2\0", 4) == 0)
             bad("a NIfTI-2 header/image pair (magic \"ni2\": the samples are in a separate .img file); "
                 "only single files (.nii, magic \"n+2\") are read");
         if (std::memcmp(m, "n+2\0\r\n\032\n", 8) != 0)
-            bad("not a NIfTI-2 file (magic \"" + shown_bytes(m, 8) + "\" at byte 4, expected \"n+2\\0\\r\\n\\x1a\\n\")");
+            bad("not a NIfTI-2 file (magic \"" + shown_bytes(m, 8) +
+                "\" at byte 4, expected \"n+2\\0\\r\\n\\x1a\\n\")");
         hd.datatype = field<std::int16_t>(h, 12, s);
         for (int i = 0; i < 8; ++i) hd.dim[i] = field<std::int64_t>(h, 16 + 8 * std::size_t(i), s);
         for (int i = 0; i < 8; ++i) hd.pixdim[i] = field<double>(h, 104 + 8 * std::size_t(i), s);
@@ -296,7 +308,8 @@ Header Reader::parse_header() {
         for (int i = 0; i < 3; ++i) hd.quat[i] = field<double>(h, 352 + 8 * std::size_t(i), s);
         for (int i = 0; i < 3; ++i) hd.qoffset[i] = field<double>(h, 376 + 8 * std::size_t(i), s);
         for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 4; ++c) hd.srow[r][c] = field<double>(h, 400 + 32 * std::size_t(r) + 8 * std::size_t(c), s);
+            for (int c = 0; c < 4; ++c)
+                hd.srow[r][c] = field<double>(h, 400 + 32 * std::size_t(r) + 8 * std::size_t(c), s);
     }
     return hd;
 }
@@ -308,8 +321,8 @@ void Reader::set_geometry(const Header& h, ScalarImage& img) const {
     };
     if (h.sform_code > 0) {
         for (int a = 0; a < 3; ++a)
-            img.axes[std::size_t(a)] = finite_vec({h.srow[0][a], h.srow[1][a], h.srow[2][a]},
-                                                  "sform column " + std::to_string(a));
+            img.axes[std::size_t(a)] =
+                finite_vec({h.srow[0][a], h.srow[1][a], h.srow[2][a]}, "sform column " + std::to_string(a));
         img.origin = finite_vec({h.srow[0][3], h.srow[1][3], h.srow[2][3]}, "sform offset (4th column)");
     } else if (h.qform_code > 0) {
         double b = h.quat[0], c = h.quat[1], d = h.quat[2];
@@ -319,7 +332,8 @@ void Reader::set_geometry(const Header& h, ScalarImage& img) const {
         double a = 1.0 - (b * b + c * c + d * d);
         if (a < 1e-7) {
             const double n = std::sqrt(b * b + c * c + d * d);
-            if (!(n > 0) || !std::isfinite(n)) bad("qform quaternion (" + num(b) + ", " + num(c) + ", " + num(d) + ") is not a rotation");
+            if (!(n > 0) || !std::isfinite(n))
+                bad("qform quaternion (" + num(b) + ", " + num(c) + ", " + num(d) + ") is not a rotation");
             b /= n;
             c /= n;
             d /= n;
@@ -327,10 +341,9 @@ void Reader::set_geometry(const Header& h, ScalarImage& img) const {
         } else {
             a = std::sqrt(a);
         }
-        const Vec3d col[3] = {
-            {a * a + b * b - c * c - d * d, 2 * (b * c + a * d), 2 * (b * d - a * c)},
-            {2 * (b * c - a * d), a * a + c * c - b * b - d * d, 2 * (c * d + a * b)},
-            {2 * (b * d + a * c), 2 * (c * d - a * b), a * a + d * d - c * c - b * b}};
+        const Vec3d col[3] = {{a * a + b * b - c * c - d * d, 2 * (b * c + a * d), 2 * (b * d - a * c)},
+                              {2 * (b * c - a * d), a * a + c * c - b * b - d * d, 2 * (c * d + a * b)},
+                              {2 * (b * d + a * c), 2 * (c * d - a * b), a * a + d * d - c * c - b * b}};
         for (int i = 1; i <= 3; ++i)
             if (!(h.pixdim[i] > 0) || !std::isfinite(h.pixdim[i]))
                 bad("qform: pixdim[" + std::to_string(i) + "] is " + num(h.pixdim[i]) + ", expected a spacing > 0");
@@ -375,7 +388,9 @@ void Reader::convert(const unsigned char* src, std::size_t n, float* dst, std::u
             const std::uint64_t nx = std::uint64_t(img.dims[0]), ny = std::uint64_t(img.dims[1]);
             bad("sample " + std::to_string(idx) + " (i, j, k) = (" + std::to_string(idx % nx) + ", " +
                 std::to_string(idx / nx % ny) + ", " + std::to_string(idx / (nx * ny)) + ") is " +
-                (std::isnan(v) ? "NaN" : std::isinf(v) ? "infinite" : "beyond the float range") +
+                (std::isnan(v)   ? "NaN"
+                 : std::isinf(v) ? "infinite"
+                                 : "beyond the float range") +
                 (scaled_ ? " (after scl_slope and scl_inter)" : ""));
         }
         dst[i] = float(v);
@@ -387,8 +402,10 @@ void Reader::read_values(const Header& h, ScalarImage& img) {
     const std::uint64_t count = img.sample_count();
     const std::uint64_t bytes = count * sb;
     std::vector<unsigned char> buf(std::size_t(std::min<std::uint64_t>(bytes, kChunkBytes)));
-    if (!gzip_) img.values.reserve(std::size_t(count));  // the file holds them (checked)
-    else img.values.reserve(std::size_t(std::min<std::uint64_t>(count, 1u << 24)));
+    if (!gzip_)
+        img.values.reserve(std::size_t(count));  // the file holds them (checked)
+    else
+        img.values.reserve(std::size_t(std::min<std::uint64_t>(count, 1u << 24)));
     std::uint64_t done = 0;
     while (done < count) {
         const std::size_t n = std::size_t(std::min<std::uint64_t>(count - done, kChunkBytes / sb));
@@ -478,8 +495,8 @@ ScalarImage Reader::read() {
     try {
         read_values(h, img);
     } catch (const std::bad_alloc&) {
-        throw OutOfMemory("read_nifti: " + path_ + ": " + num(samples) + " samples (" + num(samples * 4.0 / double(1 << 30)) +
-                          " GiB as floats) do not fit in memory");
+        throw OutOfMemory("read_nifti: " + path_ + ": " + num(samples) + " samples (" +
+                          num(samples * 4.0 / double(1 << 30)) + " GiB as floats) do not fit in memory");
     }
     return img;
 }

@@ -31,33 +31,55 @@ namespace normalflow {
 
 namespace {
 
-constexpr std::size_t kMaxHeaderBytes = 1 << 20;   // a header larger than 1 MiB is garbage
-constexpr double kMaxSamples = 1ull << 40;          // sanity bound on sizes
-constexpr double kMaxDeflateRatio = 1100.0;         // deflate cannot expand more than ~1032:1
+constexpr std::size_t kMaxHeaderBytes = 1 << 20;  // a header larger than 1 MiB is garbage
+constexpr double kMaxSamples = 1ull << 40;        // sanity bound on sizes
+constexpr double kMaxDeflateRatio = 1100.0;       // deflate cannot expand more than ~1032:1
 
 enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
 
 std::size_t scalar_bytes(Scalar s) {
     switch (s) {
-        case Scalar::I8: case Scalar::U8: return 1;
-        case Scalar::I16: case Scalar::U16: return 2;
-        case Scalar::I32: case Scalar::U32: case Scalar::F32: return 4;
+        case Scalar::I8:
+        case Scalar::U8: return 1;
+        case Scalar::I16:
+        case Scalar::U16: return 2;
+        case Scalar::I32:
+        case Scalar::U32:
+        case Scalar::F32: return 4;
         case Scalar::F64: return 8;
     }
     return 0;
 }
 
 std::optional<Scalar> parse_type(const std::string& t) {
-    static const std::map<std::string, Scalar> table = {
-        {"signed char", Scalar::I8}, {"int8", Scalar::I8}, {"int8_t", Scalar::I8},
-        {"uchar", Scalar::U8}, {"unsigned char", Scalar::U8}, {"uint8", Scalar::U8}, {"uint8_t", Scalar::U8},
-        {"short", Scalar::I16}, {"short int", Scalar::I16}, {"signed short", Scalar::I16},
-        {"signed short int", Scalar::I16}, {"int16", Scalar::I16}, {"int16_t", Scalar::I16},
-        {"ushort", Scalar::U16}, {"unsigned short", Scalar::U16}, {"unsigned short int", Scalar::U16},
-        {"uint16", Scalar::U16}, {"uint16_t", Scalar::U16},
-        {"int", Scalar::I32}, {"signed int", Scalar::I32}, {"int32", Scalar::I32}, {"int32_t", Scalar::I32},
-        {"uint", Scalar::U32}, {"unsigned int", Scalar::U32}, {"uint32", Scalar::U32}, {"uint32_t", Scalar::U32},
-        {"float", Scalar::F32}, {"double", Scalar::F64}};
+    static const std::map<std::string, Scalar> table = {{"signed char", Scalar::I8},
+                                                        {"int8", Scalar::I8},
+                                                        {"int8_t", Scalar::I8},
+                                                        {"uchar", Scalar::U8},
+                                                        {"unsigned char", Scalar::U8},
+                                                        {"uint8", Scalar::U8},
+                                                        {"uint8_t", Scalar::U8},
+                                                        {"short", Scalar::I16},
+                                                        {"short int", Scalar::I16},
+                                                        {"signed short", Scalar::I16},
+                                                        {"signed short int", Scalar::I16},
+                                                        {"int16", Scalar::I16},
+                                                        {"int16_t", Scalar::I16},
+                                                        {"ushort", Scalar::U16},
+                                                        {"unsigned short", Scalar::U16},
+                                                        {"unsigned short int", Scalar::U16},
+                                                        {"uint16", Scalar::U16},
+                                                        {"uint16_t", Scalar::U16},
+                                                        {"int", Scalar::I32},
+                                                        {"signed int", Scalar::I32},
+                                                        {"int32", Scalar::I32},
+                                                        {"int32_t", Scalar::I32},
+                                                        {"uint", Scalar::U32},
+                                                        {"unsigned int", Scalar::U32},
+                                                        {"uint32", Scalar::U32},
+                                                        {"uint32_t", Scalar::U32},
+                                                        {"float", Scalar::F32},
+                                                        {"double", Scalar::F64}};
     const auto it = table.find(t);
     if (it == table.end()) return std::nullopt;
     return it->second;
@@ -77,7 +99,9 @@ std::string lower(std::string s) {
 
 /// Closes a FILE* on scope exit.
 struct FileCloser {
-    void operator()(std::FILE* f) const { if (f) std::fclose(f); }
+    void operator()(std::FILE* f) const {
+        if (f) std::fclose(f);
+    }
 };
 using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
 
@@ -105,9 +129,7 @@ public:
 
 private:
     [[noreturn]] void bad(const std::string& what) const { throw InvalidInput(who_ + ": " + path_ + ": " + what); }
-    [[noreturn]] void bad_line(const std::string& what) const {
-        bad("line " + std::to_string(line_no_) + ": " + what);
-    }
+    [[noreturn]] void bad_line(const std::string& what) const { bad("line " + std::to_string(line_no_) + ": " + what); }
     [[noreturn]] void io_error(const std::string& what) const { throw IoError(who_ + ": " + path_ + ": " + what); }
 
     /// Opens the header file and parses the header; the stream is left at the first byte after it.
@@ -133,7 +155,7 @@ private:
     std::string path_;
     std::string who_;
     FilePtr f_;
-    std::uint64_t file_size_ = 0;   // of the file f_ reads: the header file, then the data file
+    std::uint64_t file_size_ = 0;  // of the file f_ reads: the header file, then the data file
     std::size_t header_bytes_ = 0;
     int line_no_ = 0;
 
@@ -154,7 +176,9 @@ private:
         bool init = false;
         bool done = false;
         std::vector<unsigned char> in;
-        ~Inflater() { if (init) inflateEnd(&zs); }
+        ~Inflater() {
+            if (init) inflateEnd(&zs);
+        }
     };
     std::unique_ptr<Inflater> z_;
 #endif
@@ -167,7 +191,8 @@ bool NrrdReader::read_line(std::string& line) {
     while ((c = std::fgetc(f_.get())) != EOF) {
         if (++header_bytes_ > kMaxHeaderBytes) bad("header longer than 1 MiB (not a NRRD file?)");
         if (c == '\n') break;
-        if (c == '\0') bad("line " + std::to_string(line_no_ + 1) + ": NUL byte in header (truncated or not a NRRD file)");
+        if (c == '\0')
+            bad("line " + std::to_string(line_no_ + 1) + ": NUL byte in header (truncated or not a NRRD file)");
         line.push_back(char(c));
     }
     if (c == EOF && line.empty()) return false;
@@ -192,7 +217,10 @@ void NrrdReader::parse_header() {
         bad("not a NRRD file (expected magic NRRD0001..NRRD0005, found \"" + line.substr(0, 16) + "\")");
     bool blank = false;
     while (read_line(line)) {
-        if (line.empty()) { blank = true; break; }
+        if (line.empty()) {
+            blank = true;
+            break;
+        }
         if (line[0] == '#') continue;
         const std::size_t kv = line.find(":=");
         const std::size_t colon = line.find(": ");
@@ -200,13 +228,16 @@ void NrrdReader::parse_header() {
             keys_[line.substr(0, kv)] = line.substr(kv + 2);
             continue;
         }
-        if (colon == std::string::npos) bad_line("expected \"field: description\", found \"" + line.substr(0, 40) + "\"");
+        if (colon == std::string::npos)
+            bad_line("expected \"field: description\", found \"" + line.substr(0, 40) + "\"");
         const std::string name = lower(trim(line.substr(0, colon)));
         if (fields_.count(name)) bad_line("field \"" + name + "\" given twice");
         fields_[name] = trim(line.substr(colon + 2));
         // "data file: LIST" is the last field: the file names follow it, one a line.
-        if ((name == "data file" || name == "datafile") && (fields_[name] == "LIST" || fields_[name].rfind("LIST ", 0) == 0))
-            bad_line("data file: LIST (a list of data files after the header) is not supported; use a single data file");
+        if ((name == "data file" || name == "datafile") &&
+            (fields_[name] == "LIST" || fields_[name].rfind("LIST ", 0) == 0))
+            bad_line(
+                "data file: LIST (a list of data files after the header) is not supported; use a single data file");
     }
     // Detached data: one file, named relative to the header's folder (or absolute).
     if (fields_.count("data file") && fields_.count("datafile")) bad("both \"data file\" and \"datafile\" given");
@@ -215,7 +246,8 @@ void NrrdReader::parse_header() {
         const std::string& d = it->second;
         if (d.empty()) bad("data file: no file name given");
         if (d.find('%') != std::string::npos)
-            bad("data file: \"" + d + "\" is a format string naming several data files; only a single data file is supported");
+            bad("data file: \"" + d +
+                "\" is a format string naming several data files; only a single data file is supported");
         data_file_ = d;
     }
     // A header must end with a blank line before attached data; without one the file is truncated.
@@ -254,15 +286,18 @@ void NrrdReader::parse_header() {
     // encoding
     {
         const std::string e = lower(need("encoding"));
-        if (e == "raw") encoding_ = Encoding::Raw;
+        if (e == "raw")
+            encoding_ = Encoding::Raw;
         else if (e == "gzip" || e == "gz") {
 #if defined(NORMALFLOW_HAS_ZLIB)
             encoding_ = Encoding::Gzip;
 #else
             bad("gzip encoding is not supported by this build (no zlib)");
 #endif
-        } else if (e == "ascii" || e == "text" || e == "txt") encoding_ = Encoding::Ascii;
-        else bad("unsupported encoding \"" + e + "\" (expected raw, gzip or ascii)");
+        } else if (e == "ascii" || e == "text" || e == "txt")
+            encoding_ = Encoding::Ascii;
+        else
+            bad("unsupported encoding \"" + e + "\" (expected raw, gzip or ascii)");
     }
     // endian
     if (scalar_bytes(type_) > 1 && encoding_ != Encoding::Ascii) {
@@ -270,9 +305,12 @@ void NrrdReader::parse_header() {
         if (it == fields_.end()) bad("missing required field \"endian\" for a multi-byte type");
         const std::string e = lower(it->second);
         bool little;
-        if (e == "little") little = true;
-        else if (e == "big") little = false;
-        else bad("endian is \"" + it->second + "\", expected little or big");
+        if (e == "little")
+            little = true;
+        else if (e == "big")
+            little = false;
+        else
+            bad("endian is \"" + it->second + "\", expected little or big");
         swap_ = little != (std::endian::native == std::endian::little);
     }
     // skips
@@ -283,7 +321,8 @@ void NrrdReader::parse_header() {
         char* end = nullptr;
         errno = 0;
         const long long x = std::strtoll(it->second.c_str(), &end, 10);
-        if (errno || end == it->second.c_str() || *end != '\0') bad(std::string(a) + ": expected an integer, found \"" + it->second + "\"");
+        if (errno || end == it->second.c_str() || *end != '\0')
+            bad(std::string(a) + ": expected an integer, found \"" + it->second + "\"");
         return x;
     };
     byte_skip_ = integer_field("byte skip", "byteskip");
@@ -306,7 +345,8 @@ std::vector<double> NrrdReader::parse_numbers(const std::string& s, std::size_t 
         p = end;
     }
     if (expected && out.size() != expected)
-        bad(std::string(field) + ": expected " + std::to_string(expected) + " values, found " + std::to_string(out.size()));
+        bad(std::string(field) + ": expected " + std::to_string(expected) + " values, found " +
+            std::to_string(out.size()));
     for (double x : out)
         if (!std::isfinite(x)) bad(std::string(field) + ": non-finite value in \"" + s + "\"");
     return out;
@@ -315,19 +355,26 @@ std::vector<double> NrrdReader::parse_numbers(const std::string& s, std::size_t 
 std::vector<std::optional<std::array<double, 3>>> NrrdReader::parse_vectors(const std::string& s) {
     std::vector<std::optional<std::array<double, 3>>> out;
     std::size_t i = 0;
-    auto skip = [&] { while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i; };
+    auto skip = [&] {
+        while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
+    };
     for (;;) {
         skip();
         if (i >= s.size()) break;
-        if (s.compare(i, 4, "none") == 0) { out.emplace_back(); i += 4; continue; }
+        if (s.compare(i, 4, "none") == 0) {
+            out.emplace_back();
+            i += 4;
+            continue;
+        }
         if (s[i] != '(') bad("malformed vector list \"" + s + "\" (expected \"(x,y,z)\" or none)");
         const std::size_t close = s.find(')', i);
         if (close == std::string::npos) bad("malformed vector list \"" + s + "\" (missing ')')");
         std::string inner = s.substr(i + 1, close - i - 1);
         std::replace(inner.begin(), inner.end(), ',', ' ');
         const auto v = parse_numbers(inner, 0, "vector");
-        if (v.size() != 3) bad("vector \"" + s.substr(i, close - i + 1) + "\" has " + std::to_string(v.size()) +
-                               " components, expected 3 (space dimension 3)");
+        if (v.size() != 3)
+            bad("vector \"" + s.substr(i, close - i + 1) + "\" has " + std::to_string(v.size()) +
+                " components, expected 3 (space dimension 3)");
         out.push_back(std::array<double, 3>{v[0], v[1], v[2]});
         i = close + 1;
     }
@@ -337,7 +384,8 @@ std::vector<std::optional<std::array<double, 3>>> NrrdReader::parse_vectors(cons
 NrrdGeometry NrrdReader::geometry() {
     if (const auto it = fields_.find("space dimension"); it != fields_.end() && trim(it->second) != "3")
         bad("space dimension is " + it->second + ", expected 3");
-    if (const auto it = fields_.find("space"); it != fields_.end() && lower(it->second).find("time") != std::string::npos)
+    if (const auto it = fields_.find("space");
+        it != fields_.end() && lower(it->second).find("time") != std::string::npos)
         bad("space \"" + it->second + "\" has a time axis; expected a 3-D space");
     NrrdGeometry geo;
     if (const auto it = fields_.find("space directions"); it != fields_.end()) {
@@ -398,7 +446,8 @@ void NrrdReader::read_gzip(void* dst, std::size_t bytes) {
     std::size_t left = bytes;
     auto* out = static_cast<unsigned char*>(dst);
     while (left > 0) {
-        if (z_->done) bad("truncated gzip data: decompressed stream ends after sample " + std::to_string(samples_read_));
+        if (z_->done)
+            bad("truncated gzip data: decompressed stream ends after sample " + std::to_string(samples_read_));
         const uInt chunk = uInt(std::min<std::size_t>(left, 1u << 30));
         zs.next_out = out;
         zs.avail_out = chunk;
@@ -407,21 +456,24 @@ void NrrdReader::read_gzip(void* dst, std::size_t bytes) {
                 const std::size_t n = std::fread(z_->in.data(), 1, z_->in.size(), f_.get());
                 if (n == 0) {
                     if (std::ferror(f_.get())) io_error(std::string("read error (") + std::strerror(errno) + ")");
-                    bad("truncated gzip data (file ends before sample " + std::to_string(samples_read_) + " was complete)");
+                    bad("truncated gzip data (file ends before sample " + std::to_string(samples_read_) +
+                        " was complete)");
                 }
                 zs.next_in = z_->in.data();
                 zs.avail_in = uInt(n);
             }
             const int rc = inflate(&zs, Z_NO_FLUSH);
-            if (rc == Z_STREAM_END) { z_->done = true; break; }
+            if (rc == Z_STREAM_END) {
+                z_->done = true;
+                break;
+            }
             if (rc != Z_OK && rc != Z_BUF_ERROR)
                 bad(std::string("corrupt gzip data (") + (zs.msg ? zs.msg : "zlib error") + ")");
         }
         const std::size_t produced = chunk - zs.avail_out;
         out += produced;
         left -= produced;
-        if (z_->done && left > 0)
-            bad("truncated gzip data: decompressed stream ends before all samples were read");
+        if (z_->done && left > 0) bad("truncated gzip data: decompressed stream ends before all samples were read");
     }
 }
 #else
@@ -435,8 +487,10 @@ void NrrdReader::read_ascii(double* dst, std::size_t count) {
         int len = 0, c;
         while ((c = std::fgetc(f)) != EOF && (std::isspace(c) || c == ',')) {}
         while (c != EOF && !std::isspace(c) && c != ',') {
-            if (len < 63) tok[len++] = char(c);
-            else bad("malformed ascii sample " + std::to_string(samples_read_ + n));
+            if (len < 63)
+                tok[len++] = char(c);
+            else
+                bad("malformed ascii sample " + std::to_string(samples_read_ + n));
             c = std::fgetc(f);
         }
         if (len == 0) bad("truncated ascii data: found " + std::to_string(samples_read_ + n) + " samples");
@@ -465,8 +519,10 @@ void NrrdReader::read_samples(double* dst, std::size_t count) {
     } else {
         const std::size_t sb = scalar_bytes(type_);
         raw_buf_.resize(count * sb);
-        if (encoding_ == Encoding::Raw) read_raw(raw_buf_.data(), raw_buf_.size());
-        else read_gzip(raw_buf_.data(), raw_buf_.size());
+        if (encoding_ == Encoding::Raw)
+            read_raw(raw_buf_.data(), raw_buf_.size());
+        else
+            read_gzip(raw_buf_.data(), raw_buf_.size());
         const char* s = raw_buf_.data();
         switch (type_) {
             case Scalar::I8: convert<std::int8_t>(s, dst, count, false); break;
@@ -481,7 +537,8 @@ void NrrdReader::read_samples(double* dst, std::size_t count) {
     }
     for (std::size_t i = 0; i < count; ++i)
         if (!(std::abs(dst[i]) <= std::numeric_limits<float>::max()))  // NaN, Inf, or a double beyond float
-            bad("sample " + std::to_string(samples_read_ + i) + " is not finite as a float (NaN, Inf or beyond 3.4e38)");
+            bad("sample " + std::to_string(samples_read_ + i) +
+                " is not finite as a float (NaN, Inf or beyond 3.4e38)");
     samples_read_ += count;
 }
 
@@ -489,12 +546,11 @@ void NrrdReader::open_data() {
     std::string where;  // "data file NAME: " in messages about a detached data file
     if (!data_file_.empty()) {
         namespace fs = std::filesystem;
-        const fs::path p = fs::path(data_file_).is_absolute() ? fs::path(data_file_)
-                                                                : fs::path(path_).parent_path() / data_file_;
+        const fs::path p =
+            fs::path(data_file_).is_absolute() ? fs::path(data_file_) : fs::path(path_).parent_path() / data_file_;
         where = "data file " + p.string() + ": ";
         struct stat st {};
-        if (::stat(p.c_str(), &st) != 0)
-            io_error(where + "cannot open (" + std::strerror(errno) + ")");
+        if (::stat(p.c_str(), &st) != 0) io_error(where + "cannot open (" + std::strerror(errno) + ")");
         if (!S_ISREG(st.st_mode)) io_error(where + "not a regular file");
         f_.reset(std::fopen(p.c_str(), "rb"));
         if (!f_) io_error(where + "cannot open (" + std::strerror(errno) + ")");
@@ -521,8 +577,9 @@ void NrrdReader::open_data() {
         }
         if (file_size_ < pos || file_size_ - pos < need)
             bad(where + "sizes " + std::to_string(sizes_[0]) + " " + std::to_string(sizes_[1]) + " " +
-                std::to_string(sizes_[2]) + " claim " + std::to_string(need) + " bytes of data, but the file holds only " +
-                std::to_string(file_size_ > pos ? file_size_ - pos : 0) + " (truncated?)");
+                std::to_string(sizes_[2]) + " claim " + std::to_string(need) +
+                " bytes of data, but the file holds only " + std::to_string(file_size_ > pos ? file_size_ - pos : 0) +
+                " (truncated?)");
         if (std::fseek(f_.get(), long(pos), SEEK_SET) != 0) io_error(where + "cannot seek");
     } else if (encoding_ == Encoding::Gzip) {
         const double avail = double(file_size_ - std::min(file_size_, pos));
@@ -540,7 +597,8 @@ void NrrdReader::open_data() {
     } else {
         // ascii: at least one character and one separator per sample.
         if (double(count) > double(file_size_ - std::min(file_size_, pos)))
-            bad(where + "sizes claim " + std::to_string(count) + " ascii samples, more than the file can hold (truncated?)");
+            bad(where + "sizes claim " + std::to_string(count) +
+                " ascii samples, more than the file can hold (truncated?)");
         if (byte_skip_ > 0 && std::fseek(f_.get(), long(pos + std::uint64_t(byte_skip_)), SEEK_SET) != 0)
             io_error(where + "cannot seek");
     }
@@ -548,7 +606,8 @@ void NrrdReader::open_data() {
 
 Volume NrrdReader::read_volume(const VolumeReadOptions& opt) {
     if (!(opt.half_width >= 0) || !std::isfinite(opt.half_width))
-        bad("half_width " + std::to_string(opt.half_width) + " is out of range (expected > 0 voxels, or 0 for the default)");
+        bad("half_width " + std::to_string(opt.half_width) +
+            " is out of range (expected > 0 voxels, or 0 for the default)");
     if (!std::isfinite(opt.iso)) bad("iso value is not finite");
     parse_header();
     const NrrdGeometry geo = geometry();
@@ -631,7 +690,10 @@ Volume NrrdReader::read_volume(const VolumeReadOptions& opt) {
                         const double* row = slab.data() + std::size_t(lk) * slice + std::size_t(y0 + lj) * nx + x0;
                         for (int li = 0; li < xn; ++li) {
                             const double x = row[li];
-                            if (std::abs(x) < band) { near = true; break; }
+                            if (std::abs(x) < band) {
+                                near = true;
+                                break;
+                            }
                             (x < 0 ? neg : pos) = true;
                         }
                     }
@@ -714,11 +776,13 @@ void write_nrrd(const std::string& path, const Volume& v) {
         const Vec3d o = pl.point(g.origin);
         origin = "(" + num(o.x) + "," + num(o.y) + "," + num(o.z) + ")";
     }
-    std::string hdr = "NRRD0004\n# Complete NRRD file format specification at:\n"
-                      "# http://teem.sourceforge.net/nrrd/format.html\n"
-                      "# written by normalflow: signed distance, world units, negative inside\n"
-                      "type: float\ndimension: 3\nspace dimension: 3\n";
-    hdr += "sizes: " + std::to_string(g.dims[0]) + " " + std::to_string(g.dims[1]) + " " + std::to_string(g.dims[2]) + "\n";
+    std::string hdr =
+        "NRRD0004\n# Complete NRRD file format specification at:\n"
+        "# http://teem.sourceforge.net/nrrd/format.html\n"
+        "# written by normalflow: signed distance, world units, negative inside\n"
+        "type: float\ndimension: 3\nspace dimension: 3\n";
+    hdr += "sizes: " + std::to_string(g.dims[0]) + " " + std::to_string(g.dims[1]) + " " + std::to_string(g.dims[2]) +
+           "\n";
     hdr += "space directions: " + dirs + "\n";
     hdr += "kinds: domain domain domain\ncenterings: node node node\n";
     hdr += std::string("endian: ") + (std::endian::native == std::endian::little ? "little" : "big") + "\n";

@@ -2,15 +2,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
-#include "io/util/atomic_file.h"
 #include "io/formats/format_util.h"
 #include "io/formats/mesh_formats.h"
+#include "io/util/atomic_file.h"
 
 namespace normalflow {
 
@@ -33,12 +33,11 @@ std::string quote_token(const char* p, const char* e) {
 }
 
 bool is_ignored_statement(std::string_view k) {
-    static constexpr std::string_view known[] = {"vp", "o", "g", "s", "usemtl", "mtllib",
-                                                 "l", "p", "cstype", "deg", "bmat", "step", "curv",
-                                                 "curv2", "surf", "parm", "trim", "hole", "scrv", "sp",
-                                                 "end", "con", "mg", "bevel", "c_interp", "d_interp",
-                                                 "lod", "maplib", "usemap", "shadow_obj", "trace_obj",
-                                                 "ctech", "stech"};
+    static constexpr std::string_view known[] = {
+        "vp",     "o",      "g",          "s",         "usemtl", "mtllib", "l",        "p",        "cstype",
+        "deg",    "bmat",   "step",       "curv",      "curv2",  "surf",   "parm",     "trim",     "hole",
+        "scrv",   "sp",     "end",        "con",       "mg",     "bevel",  "c_interp", "d_interp", "lod",
+        "maplib", "usemap", "shadow_obj", "trace_obj", "ctech",  "stech"};
     for (const auto& s : known)
         if (k == s) return true;
     return false;
@@ -68,7 +67,8 @@ std::size_t attach_corner_attributes(Mesh& m, const std::vector<std::array<std::
             } else if (agrees(first[v][0], key[0]) && agrees(first[v][1], key[1])) {
                 for (std::size_t k = 0; k < 2; ++k) first[v][k] = std::max(first[v][k], key[k]);
             } else {
-                const auto [it, fresh] = copies.try_emplace({std::int64_t(v), key[0], key[1]}, std::uint32_t(first.size()));
+                const auto [it, fresh] =
+                    copies.try_emplace({std::int64_t(v), key[0], key[1]}, std::uint32_t(first.size()));
                 if (fresh) {
                     m.positions.push_back(m.positions[v]);
                     if (m.has_colors()) m.colors.push_back(m.colors[v]);
@@ -104,9 +104,9 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
 
     Mesh m;
     std::vector<std::uint32_t> poly;
-    std::vector<Rgba8> colors;         // per v line, once any has a colour
-    std::vector<TexCoord> texcoords;   // vt lines
-    std::vector<Vec3f> normals;        // vn lines
+    std::vector<Rgba8> colors;                                      // per v line, once any has a colour
+    std::vector<TexCoord> texcoords;                                // vt lines
+    std::vector<Vec3f> normals;                                     // vn lines
     std::vector<std::array<std::int64_t, 2>> poly_ref, corner_ref;  // per corner: vt, vn (0-based, -1 absent)
     bool any_ref[2] = {false, false};
     std::pair<std::int64_t, std::size_t> max_ref[2] = {{-1, 0}, {-1, 0}};  // largest positive reference, its line
@@ -173,13 +173,15 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                 // vt's second coordinate is optional ("vt u"); vn needs all three
                 if (q == le && key == "vt" && a == 1) break;
                 if (q == le || !detail::parse_float(q, le, c[a]) || (q < le && !detail::is_space(*q)))
-                    fail_line(kReader, name, line, std::string(key) + " expects " + std::to_string(dims) +
-                                                       " numbers, found " + (q == le && s == le ? std::string("fewer")
-                                                                                            : quote_token(s, le)));
+                    fail_line(kReader, name, line,
+                              std::string(key) + " expects " + std::to_string(dims) + " numbers, found " +
+                                  (q == le && s == le ? std::string("fewer") : quote_token(s, le)));
                 if (!std::isfinite(c[a])) c[a] = 0.0f;
             }
-            if (key == "vt") texcoords.push_back(TexCoord{c[0], c[1]});
-            else normals.push_back(Vec3f{c[0], c[1], c[2]});
+            if (key == "vt")
+                texcoords.push_back(TexCoord{c[0], c[1]});
+            else
+                normals.push_back(Vec3f{c[0], c[1], c[2]});
         } else if (key == "f") {
             poly.clear();
             const auto nv = std::int64_t(m.positions.size());
@@ -196,8 +198,8 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                     if (q < le && *q != '/' && !detail::is_space(*q)) ok = detail::parse_int(q, le, tn[slash]);
                 }
                 if (!ok || (q < le && !detail::is_space(*q)))
-                    fail_line(kReader, name, line, "expected a face corner (v, v/vt, v//vn or v/vt/vn), found " +
-                                                       quote_token(s, le));
+                    fail_line(kReader, name, line,
+                              "expected a face corner (v, v/vt, v//vn or v/vt/vn), found " + quote_token(s, le));
                 std::int64_t r = 0;
                 if (idx == 0) {
                     fail_line(kReader, name, line, "vertex index 0 (OBJ indices start at 1)");
@@ -205,8 +207,9 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                     r = nv + idx;
                     if (r < 0)
                         fail_line(kReader, name, line,
-                                  "relative vertex index " + std::to_string(idx) + " reaches before the first vertex (" +
-                                      std::to_string(nv) + " vertices read so far)");
+                                  "relative vertex index " + std::to_string(idx) +
+                                      " reaches before the first vertex (" + std::to_string(nv) +
+                                      " vertices read so far)");
                 } else {
                     r = idx - 1;
                     if (r >= std::int64_t(std::numeric_limits<std::uint32_t>::max()))
@@ -266,8 +269,8 @@ Mesh read_obj_memory(std::string_view bytes, const std::string& name, ReadInfo* 
     }
     if (!colors.empty()) m.colors = std::move(colors);
     const std::size_t file_vertices = m.positions.size();
-    const std::size_t split_vertices = attach_corner_attributes(m, corner_ref, any_ref[0] ? &texcoords : nullptr,
-                                                                any_ref[1] ? &normals : nullptr);
+    const std::size_t split_vertices =
+        attach_corner_attributes(m, corner_ref, any_ref[0] ? &texcoords : nullptr, any_ref[1] ? &normals : nullptr);
 
     if (info) {
         *info = ReadInfo{};

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "io/util/atomic_file.h"
 #include "io/formats/format_util.h"
+#include "io/util/atomic_file.h"
 
 namespace normalflow {
 
@@ -21,7 +21,7 @@ constexpr std::string_view kWriter = "write_off";
 struct Lines {
     const char* p;
     const char* end;
-    std::size_t line = 0;  // number of the line last returned
+    std::size_t line = 0;     // number of the line last returned
     const char* b = nullptr;  // current line [b, e), comment stripped, leading space skipped
     const char* e = nullptr;
 
@@ -96,8 +96,8 @@ Mesh read_off_memory(std::string_view bytes, const std::string& name, ReadInfo* 
         if (!prefix.empty() && prefix[0] == 'C') prefix.remove_prefix(1);
         if (!prefix.empty() && prefix[0] == 'N') prefix.remove_prefix(1);
         if (!prefix.empty())
-            fail_line(kReader, name, L.line, "unsupported OFF variant " + token_text(kw, L.e) +
-                                                 " (4OFF and nOFF are not supported)");
+            fail_line(kReader, name, L.line,
+                      "unsupported OFF variant " + token_text(kw, L.e) + " (4OFF and nOFF are not supported)");
         skip_space(q, L.e);
         if (q < L.e && std::string_view(q, std::size_t(L.e - q)).substr(0, 6) == "BINARY")
             fail_line(kReader, name, L.line, "binary OFF is not supported");
@@ -128,7 +128,8 @@ Mesh read_off_memory(std::string_view bytes, const std::string& name, ReadInfo* 
     m.triangles.reserve(std::size_t(nf));
     for (std::int64_t i = 0; i < nv; ++i) {
         if (!L.next())
-            fail(kReader, name, "truncated file: " + std::to_string(i) + " of " + std::to_string(nv) + " vertices present");
+            fail(kReader, name,
+                 "truncated file: " + std::to_string(i) + " of " + std::to_string(nv) + " vertices present");
         const char* c = L.b;
         Vec3f& v = m.positions[std::size_t(i)];
         for (int a = 0; a < 3; ++a) {
@@ -144,12 +145,14 @@ Mesh read_off_memory(std::string_view bytes, const std::string& name, ReadInfo* 
     std::size_t split = 0;
     for (std::int64_t i = 0; i < nf; ++i) {
         if (!L.next())
-            fail(kReader, name, "truncated file: " + std::to_string(i) + " of " + std::to_string(nf) + " faces present");
+            fail(kReader, name,
+                 "truncated file: " + std::to_string(i) + " of " + std::to_string(nf) + " faces present");
         const char* c = L.b;
         std::int64_t n = 0;
         int_token(c, L.e, n, name, L.line);
         if (n < 3) fail_line(kReader, name, L.line, "face has " + std::to_string(n) + " corners, expected at least 3");
-        if (n > L.e - L.b) fail_line(kReader, name, L.line, "face claims " + std::to_string(n) + " corners, the line is shorter");
+        if (n > L.e - L.b)
+            fail_line(kReader, name, L.line, "face claims " + std::to_string(n) + " corners, the line is shorter");
         poly.resize(std::size_t(n));
         for (std::int64_t k = 0; k < n; ++k) {
             std::int64_t v = 0;
@@ -157,8 +160,9 @@ Mesh read_off_memory(std::string_view bytes, const std::string& name, ReadInfo* 
                 fail_line(kReader, name, L.line,
                           "face has " + std::to_string(k) + " indices, expected " + std::to_string(n));
             if (v < 0 || v >= nv)
-                fail_line(kReader, name, L.line, "vertex index " + std::to_string(v) + " out of range (the file has " +
-                                                     std::to_string(nv) + " vertices)");
+                fail_line(kReader, name, L.line,
+                          "vertex index " + std::to_string(v) + " out of range (the file has " + std::to_string(nv) +
+                              " vertices)");
             poly[std::size_t(k)] = std::uint32_t(v);
         }
         // anything after the indices (a colour) is ignored

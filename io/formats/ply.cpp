@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "io/util/atomic_file.h"
 #include "io/formats/format_util.h"
+#include "io/util/atomic_file.h"
 
 namespace normalflow {
 
@@ -22,9 +22,13 @@ enum class PType : std::uint8_t { I8, U8, I16, U16, I32, U32, F32, F64 };
 
 std::size_t type_size(PType t) {
     switch (t) {
-        case PType::I8: case PType::U8: return 1;
-        case PType::I16: case PType::U16: return 2;
-        case PType::I32: case PType::U32: case PType::F32: return 4;
+        case PType::I8:
+        case PType::U8: return 1;
+        case PType::I16:
+        case PType::U16: return 2;
+        case PType::I32:
+        case PType::U32:
+        case PType::F32: return 4;
         case PType::F64: return 8;
     }
     return 1;
@@ -33,12 +37,15 @@ std::size_t type_size(PType t) {
 bool is_integer(PType t) { return t != PType::F32 && t != PType::F64; }
 
 bool parse_type(std::string_view s, PType& t) {
-    struct Entry { std::string_view name; PType type; };
+    struct Entry {
+        std::string_view name;
+        PType type;
+    };
     static constexpr Entry table[] = {
-        {"char", PType::I8},    {"int8", PType::I8},     {"uchar", PType::U8},   {"uint8", PType::U8},
-        {"short", PType::I16},  {"int16", PType::I16},   {"ushort", PType::U16}, {"uint16", PType::U16},
-        {"int", PType::I32},    {"int32", PType::I32},   {"uint", PType::U32},   {"uint32", PType::U32},
-        {"float", PType::F32},  {"float32", PType::F32}, {"double", PType::F64}, {"float64", PType::F64}};
+        {"char", PType::I8},   {"int8", PType::I8},     {"uchar", PType::U8},   {"uint8", PType::U8},
+        {"short", PType::I16}, {"int16", PType::I16},   {"ushort", PType::U16}, {"uint16", PType::U16},
+        {"int", PType::I32},   {"int32", PType::I32},   {"uint", PType::U32},   {"uint32", PType::U32},
+        {"float", PType::F32}, {"float32", PType::F32}, {"double", PType::F64}, {"float64", PType::F64}};
     for (const auto& e : table)
         if (e.name == s) {
             t = e.type;
@@ -49,7 +56,7 @@ bool parse_type(std::string_view s, PType& t) {
 
 struct Property {
     std::string name;
-    PType type = PType::F32;   // scalar type, or the list's item type
+    PType type = PType::F32;  // scalar type, or the list's item type
     bool is_list = false;
     PType count_type = PType::U8;
 };
@@ -145,10 +152,14 @@ Header parse_header(std::string_view bytes, const std::string& name) {
         }
         if (w[0] == "format") {
             if (w.size() < 3) fail_line(kReader, name, line, "malformed format line");
-            if (w[1] == "ascii") h.encoding = Encoding::Ascii;
-            else if (w[1] == "binary_little_endian") h.encoding = Encoding::BinaryLE;
-            else if (w[1] == "binary_big_endian") h.encoding = Encoding::BinaryBE;
-            else fail_line(kReader, name, line, "unknown format " + printable(w[1]));
+            if (w[1] == "ascii")
+                h.encoding = Encoding::Ascii;
+            else if (w[1] == "binary_little_endian")
+                h.encoding = Encoding::BinaryLE;
+            else if (w[1] == "binary_big_endian")
+                h.encoding = Encoding::BinaryBE;
+            else
+                fail_line(kReader, name, line, "unknown format " + printable(w[1]));
             have_format = true;
         } else if (w[0] == "element") {
             if (w.size() != 3) fail_line(kReader, name, line, "malformed element line (expected 'element NAME COUNT')");
@@ -165,15 +176,20 @@ Header parse_header(std::string_view bytes, const std::string& name) {
             if (h.elements.empty()) fail_line(kReader, name, line, "property before any element");
             Property p;
             if (w.size() >= 2 && w[1] == "list") {
-                if (w.size() != 5) fail_line(kReader, name, line, "malformed list property (expected 'property list COUNT_TYPE ITEM_TYPE NAME')");
+                if (w.size() != 5)
+                    fail_line(kReader, name, line,
+                              "malformed list property (expected 'property list COUNT_TYPE ITEM_TYPE NAME')");
                 if (!parse_type(w[2], p.count_type) || !parse_type(w[3], p.type))
                     fail_line(kReader, name, line, "unknown property type");
-                if (!is_integer(p.count_type)) fail_line(kReader, name, line, "list count type must be an integer type");
+                if (!is_integer(p.count_type))
+                    fail_line(kReader, name, line, "list count type must be an integer type");
                 p.is_list = true;
                 p.name = std::string(w[4]);
             } else {
-                if (w.size() != 3) fail_line(kReader, name, line, "malformed property line (expected 'property TYPE NAME')");
-                if (!parse_type(w[1], p.type)) fail_line(kReader, name, line, "unknown property type " + printable(w[1]));
+                if (w.size() != 3)
+                    fail_line(kReader, name, line, "malformed property line (expected 'property TYPE NAME')");
+                if (!parse_type(w[1], p.type))
+                    fail_line(kReader, name, line, "unknown property type " + printable(w[1]));
                 p.name = std::string(w[2]);
             }
             h.elements.back().props.push_back(std::move(p));
@@ -197,13 +213,11 @@ void check_counts(const Header& h, std::size_t available, const std::string& nam
         if (e.props.empty())
             detail::fail_line(kReader, name, e.line, "element '" + e.name + "' has entries but no properties");
         std::uint64_t min_bytes = 0;
-        for (const Property& p : e.props)
-            min_bytes += ascii ? 2 : type_size(p.is_list ? p.count_type : p.type);
+        for (const Property& p : e.props) min_bytes += ascii ? 2 : type_size(p.is_list ? p.count_type : p.type);
         if (e.count > left / min_bytes)
             detail::fail_line(kReader, name, e.line,
-                              "header claims " + std::to_string(e.count) + " " + e.name +
-                                  " entries, more than the " + std::to_string(available) +
-                                  " bytes of data can hold (truncated or corrupt file)");
+                              "header claims " + std::to_string(e.count) + " " + e.name + " entries, more than the " +
+                                  std::to_string(available) + " bytes of data can hold (truncated or corrupt file)");
         left -= e.count * min_bytes;
     }
 }
@@ -213,13 +227,36 @@ constexpr int kSlotNormal = 0, kSlotColor = 3, kSlotTex = 7, kSlots = 9;
 
 /// The attribute slot a vertex property name fills, or -1.
 int attribute_slot(std::string_view n) {
-    struct Entry { std::string_view name; int slot; };
-    static constexpr Entry table[] = {
-        {"nx", 0}, {"ny", 1}, {"nz", 2}, {"normal_x", 0}, {"normal_y", 1}, {"normal_z", 2},
-        {"red", 3}, {"green", 4}, {"blue", 5}, {"alpha", 6}, {"r", 3}, {"g", 4}, {"b", 5}, {"a", 6},
-        {"diffuse_red", 3}, {"diffuse_green", 4}, {"diffuse_blue", 5}, {"diffuse_alpha", 6},
-        {"s", 7}, {"t", 8}, {"u", 7}, {"v", 8}, {"texture_u", 7}, {"texture_v", 8},
-        {"texture_s", 7}, {"texture_t", 8}};
+    struct Entry {
+        std::string_view name;
+        int slot;
+    };
+    static constexpr Entry table[] = {{"nx", 0},
+                                      {"ny", 1},
+                                      {"nz", 2},
+                                      {"normal_x", 0},
+                                      {"normal_y", 1},
+                                      {"normal_z", 2},
+                                      {"red", 3},
+                                      {"green", 4},
+                                      {"blue", 5},
+                                      {"alpha", 6},
+                                      {"r", 3},
+                                      {"g", 4},
+                                      {"b", 5},
+                                      {"a", 6},
+                                      {"diffuse_red", 3},
+                                      {"diffuse_green", 4},
+                                      {"diffuse_blue", 5},
+                                      {"diffuse_alpha", 6},
+                                      {"s", 7},
+                                      {"t", 8},
+                                      {"u", 7},
+                                      {"v", 8},
+                                      {"texture_u", 7},
+                                      {"texture_v", 8},
+                                      {"texture_s", 7},
+                                      {"texture_t", 8}};
     for (const auto& e : table)
         if (e.name == n) return e.slot;
     return -1;
@@ -229,8 +266,8 @@ struct Layout {
     const Element* vertex = nullptr;
     int xyz[3] = {-1, -1, -1};  // property indices of x, y, z in vertex
     const Element* face = nullptr;
-    int indices = -1;           // property index of vertex_indices in face
-    std::vector<int> slot;      // per vertex property: the attribute slot it fills, or -1
+    int indices = -1;       // property index of vertex_indices in face
+    std::vector<int> slot;  // per vertex property: the attribute slot it fills, or -1
     bool normals = false, colors = false, texcoords = false;
 };
 
@@ -269,7 +306,8 @@ Layout find_layout(const Header& h, const std::string& name) {
         const Property& p = L.vertex->props[std::size_t(i)];
         for (int a = 0; a < 3; ++a)
             if (p.name.size() == 1 && p.name[0] == "xyz"[a] && L.xyz[a] < 0) {
-                if (p.is_list) detail::fail_line(kReader, name, L.vertex->line, "vertex property " + p.name + " is a list");
+                if (p.is_list)
+                    detail::fail_line(kReader, name, L.vertex->line, "vertex property " + p.name + " is a list");
                 L.xyz[a] = i;
             }
     }
@@ -292,8 +330,10 @@ Layout find_layout(const Header& h, const std::string& name) {
     for (int i = 0; i < int(L.face->props.size()); ++i) {
         const Property& p = L.face->props[std::size_t(i)];
         if ((p.name == "vertex_indices" || p.name == "vertex_index") && L.indices < 0) {
-            if (!p.is_list) detail::fail_line(kReader, name, L.face->line, "face property " + p.name + " is not a list");
-            if (!is_integer(p.type)) detail::fail_line(kReader, name, L.face->line, "face indices must have an integer type");
+            if (!p.is_list)
+                detail::fail_line(kReader, name, L.face->line, "face property " + p.name + " is not a list");
+            if (!is_integer(p.type))
+                detail::fail_line(kReader, name, L.face->line, "face indices must have an integer type");
             L.indices = i;
         }
     }
@@ -317,8 +357,9 @@ void read_binary(std::string_view bytes, const Header& h, const Layout& L, const
     const char* p = bytes.data() + h.data_offset;
     const char* const end = bytes.data() + bytes.size();
     auto truncated = [&](const Element& e, std::uint64_t i) {
-        detail::fail(kReader, name, "truncated file: " + e.name + " " + std::to_string(i) + " of " +
-                                        std::to_string(e.count) + " is incomplete");
+        detail::fail(kReader, name,
+                     "truncated file: " + e.name + " " + std::to_string(i) + " of " + std::to_string(e.count) +
+                         " is incomplete");
     };
     const std::size_t nv = m.positions.size();
     for (const Element& e : h.elements) {
@@ -338,7 +379,8 @@ void read_binary(std::string_view bytes, const Header& h, const Layout& L, const
                                          &e.props[std::size_t(L.xyz[2])]};
                 const std::size_t ox[3] = {offset[std::size_t(L.xyz[0])], offset[std::size_t(L.xyz[1])],
                                            offset[std::size_t(L.xyz[2])]};
-                const bool all_float = px[0]->type == PType::F32 && px[1]->type == PType::F32 && px[2]->type == PType::F32;
+                const bool all_float =
+                    px[0]->type == PType::F32 && px[1]->type == PType::F32 && px[2]->type == PType::F32;
                 for (std::size_t i = 0; i < nv; ++i, p += stride) {
                     for (std::size_t k = 0; k < e.props.size(); ++k)
                         if (L.slot[k] >= 0)
@@ -349,12 +391,14 @@ void read_binary(std::string_view bytes, const Header& h, const Layout& L, const
                         v = {detail::load_scalar<float>(p + ox[0], be), detail::load_scalar<float>(p + ox[1], be),
                              detail::load_scalar<float>(p + ox[2], be)};
                         if (!is_finite(v))
-                            detail::fail(kReader, name, "vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
+                            detail::fail(kReader, name,
+                                         "vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
                     } else {
                         for (int a = 0; a < 3; ++a)
                             if (!to_float(load_double(p + ox[a], px[a]->type, be), v[a]))
-                                detail::fail(kReader, name, "vertex " + std::to_string(i) +
-                                                                " has a NaN, infinite or out-of-float-range coordinate");
+                                detail::fail(kReader, name,
+                                             "vertex " + std::to_string(i) +
+                                                 " has a NaN, infinite or out-of-float-range coordinate");
                     }
                 }
             } else {
@@ -374,8 +418,9 @@ void read_binary(std::string_view bytes, const Header& h, const Layout& L, const
                     if (is_vertex) {
                         for (int a = 0; a < 3; ++a)
                             if (int(k) == L.xyz[a] && !to_float(load_double(p, pr.type, be), m.positions[i][a]))
-                                detail::fail(kReader, name, "vertex " + std::to_string(i) +
-                                                                " has a NaN, infinite or out-of-float-range coordinate");
+                                detail::fail(kReader, name,
+                                             "vertex " + std::to_string(i) +
+                                                 " has a NaN, infinite or out-of-float-range coordinate");
                         if (L.slot[k] >= 0)
                             store_attribute(L, m, std::size_t(i), L.slot[k], load_double(p, pr.type, be), pr.type);
                     }
@@ -390,15 +435,16 @@ void read_binary(std::string_view bytes, const Header& h, const Layout& L, const
                 if (std::uint64_t(end - p) / isz < std::uint64_t(n)) truncated(e, i);
                 if (is_face && int(k) == L.indices) {
                     if (n < 3)
-                        detail::fail(kReader, name, "face " + std::to_string(i) + " has " + std::to_string(n) +
-                                                        " corners, expected at least 3");
+                        detail::fail(kReader, name,
+                                     "face " + std::to_string(i) + " has " + std::to_string(n) +
+                                         " corners, expected at least 3");
                     sink.poly.resize(std::size_t(n));
                     for (std::int64_t c = 0; c < n; ++c, p += isz) {
                         const std::int64_t v = load_int(p, pr.type, be);
                         if (v < 0 || std::uint64_t(v) >= nv)
-                            detail::fail(kReader, name, "face " + std::to_string(i) + ": vertex index " +
-                                                            std::to_string(v) + " out of range (the file has " +
-                                                            std::to_string(nv) + " vertices)");
+                            detail::fail(kReader, name,
+                                         "face " + std::to_string(i) + ": vertex index " + std::to_string(v) +
+                                             " out of range (the file has " + std::to_string(nv) + " vertices)");
                         sink.poly[std::size_t(c)] = std::uint32_t(v);
                     }
                     if (n > 3) ++sink.split;
@@ -446,8 +492,9 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
     auto need = [&](const Element& e, std::uint64_t i) {
         const std::string_view t = tk.next();
         if (t.empty())
-            fail_line(kReader, name, record_line, "truncated file: " + e.name + " " + std::to_string(i) + " of " +
-                                                      std::to_string(e.count) + " is incomplete");
+            fail_line(kReader, name, record_line,
+                      "truncated file: " + e.name + " " + std::to_string(i) + " of " + std::to_string(e.count) +
+                          " is incomplete");
         return t;
     };
     auto integer = [&](std::string_view t) {
@@ -485,7 +532,8 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
                         if (!detail::parse_float(s, t.data() + t.size(), f) || s != t.data() + t.size())
                             fail_line(kReader, name, tk.line, "expected a coordinate, found " + printable(t));
                         if (!std::isfinite(f))
-                            fail_line(kReader, name, tk.line, "vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
+                            fail_line(kReader, name, tk.line,
+                                      "vertex " + std::to_string(i) + " has a NaN or infinite coordinate");
                     } else if (is_vertex && L.slot[k] >= 0) {
                         store_attribute(L, m, std::size_t(i), L.slot[k], number(t), pr.type);
                     } else {
@@ -497,7 +545,8 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
                 if (n < 0) fail_line(kReader, name, tk.line, "negative list length");
                 if (is_face && int(k) == L.indices) {
                     if (n < 3)
-                        fail_line(kReader, name, tk.line, "face has " + std::to_string(n) + " corners, expected at least 3");
+                        fail_line(kReader, name, tk.line,
+                                  "face has " + std::to_string(n) + " corners, expected at least 3");
                     if (std::uint64_t(n) > bytes.size()) fail_line(kReader, name, tk.line, "absurd list length");
                     sink.poly.resize(std::size_t(n));
                     for (std::int64_t c = 0; c < n; ++c) {
@@ -508,9 +557,9 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
                                           " has " + std::to_string(c) + " of its " + std::to_string(n) + " indices");
                         const std::int64_t v = integer(t);
                         if (v < 0 || std::uint64_t(v) >= nv)
-                            fail_line(kReader, name, tk.line, "vertex index " + std::to_string(v) +
-                                                                  " out of range (the file has " + std::to_string(nv) +
-                                                                  " vertices)");
+                            fail_line(kReader, name, tk.line,
+                                      "vertex index " + std::to_string(v) + " out of range (the file has " +
+                                          std::to_string(nv) + " vertices)");
                         sink.poly[std::size_t(c)] = std::uint32_t(v);
                     }
                     if (n > 3) ++sink.split;
@@ -522,7 +571,8 @@ void read_ascii(std::string_view bytes, const Header& h, const Layout& L, const 
         }
     }
     const std::string_view rest = tk.next();
-    if (!rest.empty()) fail_line(kReader, name, tk.line, "unexpected data " + printable(rest) + " after the last element");
+    if (!rest.empty())
+        fail_line(kReader, name, tk.line, "unexpected data " + printable(rest) + " after the last element");
 }
 
 }  // namespace

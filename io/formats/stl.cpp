@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "io/util/atomic_file.h"
 #include "io/formats/format_util.h"
+#include "io/util/atomic_file.h"
 
 namespace normalflow {
 
@@ -185,16 +185,18 @@ Mesh read_stl_memory(std::string_view bytes, const std::string& name, ReadInfo* 
         if (expected == bytes.size() || (!solid && expected < bytes.size()))
             return read_binary(bytes, name, std::size_t(n), info);
         if (!solid)
-            detail::fail(kReader, name, "truncated binary STL: the header says " + std::to_string(n) +
-                                            " triangles (" + std::to_string(expected) + " bytes), the file has " +
-                                            std::to_string(bytes.size()) + " bytes");
+            detail::fail(kReader, name,
+                         "truncated binary STL: the header says " + std::to_string(n) + " triangles (" +
+                             std::to_string(expected) + " bytes), the file has " + std::to_string(bytes.size()) +
+                             " bytes");
         return read_ascii(bytes, name, info,
                           " (not a binary STL either: " + std::to_string(bytes.size()) + " bytes, not 84 + 50 * " +
                               std::to_string(n) + ")");
     }
     if (!solid)
-        detail::fail(kReader, name, "not an STL file (" + std::to_string(bytes.size()) +
-                                        " bytes: too short for binary, no 'solid' keyword)");
+        detail::fail(
+            kReader, name,
+            "not an STL file (" + std::to_string(bytes.size()) + " bytes: too short for binary, no 'solid' keyword)");
     return read_ascii(bytes, name, info, "");
 }
 

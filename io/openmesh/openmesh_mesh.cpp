@@ -4,11 +4,11 @@
 // iterations run over plain vectors with TBB, reading one buffer and writing another.
 #include "io/openmesh/smoothing.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "core/errors.h"
-#include "extract/surface_attributes.h"
 #include "core/mesh_report.h"
+#include "extract/surface_attributes.h"
 
 namespace normalflow {
 
@@ -73,8 +73,8 @@ HalfEdgeMesh to_openmesh(const Mesh& m, const char* who) {
             ++h.faces_skipped;
             continue;
         }
-        const auto f = h.om.add_face(h.om.vertex_handle(int(t[0])), h.om.vertex_handle(int(t[1])),
-                                     h.om.vertex_handle(int(t[2])));
+        const auto f =
+            h.om.add_face(h.om.vertex_handle(int(t[0])), h.om.vertex_handle(int(t[1])), h.om.vertex_handle(int(t[2])));
         if (!f.is_valid()) ++h.faces_skipped;
     }
     return h;
@@ -230,7 +230,8 @@ SmoothingReport bilateral_normal_filter(Mesh& m, const BilateralNormalOptions& o
     if (opt.normal_iterations < 0 || opt.vertex_iterations < 0)
         throw InvalidInput(std::string(who) + ": iterations must be >= 0");
     if (!(opt.sigma_spatial >= 0) || !std::isfinite(opt.sigma_spatial))
-        throw InvalidInput(std::string(who) + ": sigma_spatial " + std::to_string(opt.sigma_spatial) + ", expected >= 0");
+        throw InvalidInput(std::string(who) + ": sigma_spatial " + std::to_string(opt.sigma_spatial) +
+                           ", expected >= 0");
     if (!(opt.sigma_range > 0 && opt.sigma_range <= 2))
         throw InvalidInput(std::string(who) + ": sigma_range " + std::to_string(opt.sigma_range) +
                            " out of range, expected (0, 2]");
@@ -245,7 +246,8 @@ SmoothingReport bilateral_normal_filter(Mesh& m, const BilateralNormalOptions& o
     std::vector<Tri> corners(nf);
     for (std::size_t f = 0; f < nf; ++f) {
         int k = 0;
-        for (auto v = om.cfv_iter(om.face_handle(int(f))); v.is_valid() && k < 3; ++v) corners[f][k++] = std::uint32_t(v->idx());
+        for (auto v = om.cfv_iter(om.face_handle(int(f))); v.is_valid() && k < 3; ++v)
+            corners[f][k++] = std::uint32_t(v->idx());
     }
     std::vector<std::uint32_t> vf_offset(nv + 1, 0), vf;
     for (std::size_t v = 0; v < nv; ++v) {
@@ -256,7 +258,8 @@ SmoothingReport bilateral_normal_filter(Mesh& m, const BilateralNormalOptions& o
     std::vector<std::uint32_t> ff_offset(nf + 1, 0), ff;
     for (std::size_t f = 0; f < nf; ++f) {
         const std::size_t start = ff.size();
-        for (std::uint32_t c : corners[f]) ff.insert(ff.end(), vf.begin() + vf_offset[c], vf.begin() + vf_offset[c + 1]);
+        for (std::uint32_t c : corners[f])
+            ff.insert(ff.end(), vf.begin() + vf_offset[c], vf.begin() + vf_offset[c + 1]);
         std::sort(ff.begin() + std::ptrdiff_t(start), ff.end());
         ff.erase(std::unique(ff.begin() + std::ptrdiff_t(start), ff.end()), ff.end());
         ff_offset[f + 1] = std::uint32_t(ff.size());
@@ -292,7 +295,8 @@ SmoothingReport bilateral_normal_filter(Mesh& m, const BilateralNormalOptions& o
         for (auto e = om.edges_begin(); e != om.edges_end(); ++e) {
             const auto h0 = om.halfedge_handle(*e, 0), h1 = om.halfedge_handle(*e, 1);
             if (om.is_boundary(h0) || om.is_boundary(h1)) continue;
-            sum += norm(centroid[std::size_t(om.face_handle(h0).idx())] - centroid[std::size_t(om.face_handle(h1).idx())]);
+            sum +=
+                norm(centroid[std::size_t(om.face_handle(h0).idx())] - centroid[std::size_t(om.face_handle(h1).idx())]);
             ++count;
         }
         sigma_s = count > 0 ? sum / double(count) : 1.0;

@@ -40,42 +40,42 @@ enum class LaplacianWeights {
 
 /// Options of laplacian_smooth.
 struct LaplacianOptions {
-    double lambda = 0.5;          ///< step factor per iteration, in (0, 1]; p ← p + λ L(p)
-    int iterations = 10;          ///< number of steps, >= 0
+    double lambda = 0.5;                                   ///< step factor per iteration, in (0, 1]; p ← p + λ L(p)
+    int iterations = 10;                                   ///< number of steps, >= 0
     LaplacianWeights weights = LaplacianWeights::Uniform;  ///< umbrella weights (fixed from the input)
-    bool fix_boundary = true;     ///< keep vertices on open boundaries in place
+    bool fix_boundary = true;                              ///< keep vertices on open boundaries in place
 };
 
 /// Options of taubin_smooth. One iteration is a λ step followed by a μ step (Taubin 1995, §4).
 struct TaubinOptions {
-    double lambda = 0.5;          ///< shrinking step, in (0, 1]
-    double mu = -0.53;            ///< inflating step, negative with |μ| > λ (pass band k_PB = 1/λ + 1/μ ≈ 0.11)
-    int iterations = 10;          ///< number of λ|μ pairs, >= 0
+    double lambda = 0.5;  ///< shrinking step, in (0, 1]
+    double mu = -0.53;    ///< inflating step, negative with |μ| > λ (pass band k_PB = 1/λ + 1/μ ≈ 0.11)
+    int iterations = 10;  ///< number of λ|μ pairs, >= 0
     LaplacianWeights weights = LaplacianWeights::Uniform;  ///< umbrella weights (fixed from the input)
-    bool fix_boundary = true;     ///< keep vertices on open boundaries in place
+    bool fix_boundary = true;                              ///< keep vertices on open boundaries in place
 };
 
 /// Options of bilateral_normal_filter.
 struct BilateralNormalOptions {
-    int normal_iterations = 20;   ///< face-normal filtering passes, >= 0 (Zheng et al. use 1 to 20)
-    int vertex_iterations = 10;   ///< vertex-update passes after the normals are filtered, >= 0
+    int normal_iterations = 20;  ///< face-normal filtering passes, >= 0 (Zheng et al. use 1 to 20)
+    int vertex_iterations = 10;  ///< vertex-update passes after the normals are filtered, >= 0
     /// σ_s of the spatial Gaussian, world units; 0 = the mean distance between the centroids of
     /// edge-adjacent faces (Zheng et al.'s default). >= 0.
     double sigma_spatial = 0.0;
     /// σ_r of the range Gaussian on |n_i − n_j| (unitless, in (0, 2]); small values keep creases.
     double sigma_range = 0.35;
-    bool fix_boundary = true;     ///< keep vertices on open boundaries in place
+    bool fix_boundary = true;  ///< keep vertices on open boundaries in place
 };
 
 /// What a smoother did.
 struct SmoothingReport {
-    std::size_t vertices = 0;        ///< welded vertices smoothed over
-    std::size_t faces = 0;           ///< faces in the half-edge mesh
-    std::size_t faces_skipped = 0;   ///< faces OpenMesh could not add (non-manifold, degenerate)
+    std::size_t vertices = 0;           ///< welded vertices smoothed over
+    std::size_t faces = 0;              ///< faces in the half-edge mesh
+    std::size_t faces_skipped = 0;      ///< faces OpenMesh could not add (non-manifold, degenerate)
     std::size_t boundary_vertices = 0;  ///< vertices on an open boundary
-    int iterations = 0;              ///< iterations run (Taubin: λ|μ pairs; bilateral: normal passes)
-    double max_displacement = 0.0;   ///< largest distance any vertex moved, world units
-    double seconds = 0.0;            ///< wall-clock time
+    int iterations = 0;                 ///< iterations run (Taubin: λ|μ pairs; bilateral: normal passes)
+    double max_displacement = 0.0;      ///< largest distance any vertex moved, world units
+    double seconds = 0.0;               ///< wall-clock time
     std::vector<std::string> warnings;  ///< e.g. "3 non-manifold faces left out of the neighbourhoods"
 };
 

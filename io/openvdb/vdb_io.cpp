@@ -11,15 +11,15 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
-#include <cstdint>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
-#include <new>
 #include <mutex>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -141,7 +141,8 @@ openvdb::math::Transform::Ptr to_openvdb_transform(const Grid& g) {
 }
 
 bool axis_aligned(const std::array<Vec3d, 3>& r) {
-    return norm(r[0] - Vec3d{1, 0, 0}) < 1e-9 && norm(r[1] - Vec3d{0, 1, 0}) < 1e-9 && norm(r[2] - Vec3d{0, 0, 1}) < 1e-9;
+    return norm(r[0] - Vec3d{1, 0, 0}) < 1e-9 && norm(r[1] - Vec3d{0, 1, 0}) < 1e-9 &&
+           norm(r[2] - Vec3d{0, 0, 1}) < 1e-9;
 }
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -177,8 +178,7 @@ std::uint64_t data_segment_bytes() {
 // Set only when a sanitizer runtime is linked (weak: null otherwise); <sanitizer/allocator_interface.h>
 // is not shipped with GCC.
 extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*malloc_hook)(const volatile void*, std::size_t),
-                                                         void (*free_hook)(const volatile void*))
-    __attribute__((weak));
+                                                         void (*free_hook)(const volatile void*)) __attribute__((weak));
 extern "C" std::size_t __sanitizer_get_allocated_size(const volatile void* p) __attribute__((weak));
 
 namespace normalflow {
@@ -244,8 +244,8 @@ openvdb::FloatGrid::Ptr read_grid_isolated(const std::string& path, const std::s
             keep = new openvdb::FloatGrid::Ptr(read_first_float_grid(path, who));
         } catch (const std::bad_alloc&) {
             if (cap == 0) throw;
-            throw InvalidInput(who + ": not a valid VDB file (reading it needs more than " +
-                               std::to_string(cap >> 20) + " MiB, far more than a file of this size can hold)");
+            throw InvalidInput(who + ": not a valid VDB file (reading it needs more than " + std::to_string(cap >> 20) +
+                               " MiB, far more than a file of this size can hold)");
         }
         const openvdb::FloatGrid::Ptr& grid = *keep;
         const Frame frame = check_transform(grid->transform(), who);
@@ -376,7 +376,8 @@ Volume volume_from_grid(openvdb::FloatGrid::Ptr grid, const std::string& who) {
     for (int a = 0; a < 3; ++a) {
         const std::int64_t n = std::int64_t(bb.max()[a]) - bb.min()[a] + 1;
         if (n < 1 || n > (std::int64_t(1) << 30))
-            throw InvalidInput(who + ": grid extent " + std::to_string(n) + " along axis " + std::to_string(a) + " is too large");
+            throw InvalidInput(who + ": grid extent " + std::to_string(n) + " along axis " + std::to_string(a) +
+                               " is too large");
         g.dims[a] = int(n);
         blocks *= std::uint64_t((n + kBlockDim - 1) / kBlockDim);
     }
@@ -405,8 +406,7 @@ Volume volume_from_grid(openvdb::FloatGrid::Ptr grid, const std::string& who) {
         float* dst = vol.block_values(b);
         for (openvdb::Index n = 0; n < openvdb::FloatTree::LeafNodeType::SIZE; ++n) {
             const float x = leaf->getValue(n);
-            if (!std::isfinite(x))
-                {
+            if (!std::isfinite(x)) {
                 const openvdb::Coord c = leaf->offsetToGlobalCoord(n);
                 throw InvalidInput(who + ": value at voxel (" + std::to_string(c[0]) + ", " + std::to_string(c[1]) +
                                    ", " + std::to_string(c[2]) + ") is not finite");
@@ -465,7 +465,8 @@ openvdb::FloatGrid::Ptr grid_from_volume(const Volume& v) {
             for (int lj = 0; lj < kBlockDim; ++lj)
                 for (int li = 0; li < kBlockDim; ++li) {
                     const float x = src[Volume::local_index(li, lj, lk)];
-                    const openvdb::Index n = openvdb::FloatTree::LeafNodeType::coordToOffset(openvdb::Coord(li, lj, lk));
+                    const openvdb::Index n =
+                        openvdb::FloatTree::LeafNodeType::coordToOffset(openvdb::Coord(li, lj, lk));
                     leaf->setValueOnly(n, x);
                     leaf->setActiveState(n, std::abs(x) < v.background);
                 }
@@ -474,7 +475,8 @@ openvdb::FloatGrid::Ptr grid_from_volume(const Volume& v) {
         for (int bj = 0; bj < v.block_dims[1]; ++bj)
             for (int bi = 0; bi < v.block_dims[0]; ++bi)
                 if (v.block_table[v.table_index(bi, bj, bk)] == kBlockInside)
-                    tree.addTile(1, openvdb::Coord(bi * kBlockDim, bj * kBlockDim, bk * kBlockDim), -v.background, false);
+                    tree.addTile(1, openvdb::Coord(bi * kBlockDim, bj * kBlockDim, bk * kBlockDim), -v.background,
+                                 false);
     openvdb::tools::prune(tree);
     return grid;
 }

@@ -8,8 +8,8 @@
 #include <type_traits>
 
 #include "core/errors.h"
-#include "core/stopwatch.h"
 #include "core/mesh_report.h"
+#include "core/stopwatch.h"
 #include "extract/decimate.h"
 #include "extract/surface_attributes.h"
 #include "metrics/surface_distance.h"
@@ -58,7 +58,8 @@ const char* to_string(DistanceQuery q) {
 void validate(const PipelineOptions& o) {
     const ScanConvertOptions& s = o.scan;
     if (!(s.voxel_size >= 0) || !std::isfinite(s.voxel_size)) bad_option("scan.voxel_size", str(s.voxel_size), ">= 0");
-    if (s.voxel_size == 0 && s.resolution < 0) bad_option("scan.resolution", str(s.resolution), ">= 1, or 0 (automatic)");
+    if (s.voxel_size == 0 && s.resolution < 0)
+        bad_option("scan.resolution", str(s.resolution), ">= 1, or 0 (automatic)");
     if (!(s.half_width >= 1) || !std::isfinite(s.half_width)) bad_option("scan.half_width", str(s.half_width), ">= 1");
     if (!(s.shell_thickness >= 0) || !std::isfinite(s.shell_thickness))
         bad_option("scan.shell_thickness", str(s.shell_thickness), ">= 0");
@@ -79,12 +80,14 @@ void validate(const PipelineOptions& o) {
         if (!(m.alpha >= 0) || !std::isfinite(m.alpha)) bad_option("smooth.alpha", str(m.alpha), ">= 0");
         if (m.conductance_presmooth_steps < 0)
             bad_option("smooth.conductance_presmooth_steps", str(m.conductance_presmooth_steps), ">= 0");
-        if (!(m.mu_robust >= 0) || !std::isfinite(m.mu_robust)) bad_option("smooth.mu_robust", str(m.mu_robust), ">= 0");
+        if (!(m.mu_robust >= 0) || !std::isfinite(m.mu_robust))
+            bad_option("smooth.mu_robust", str(m.mu_robust), ">= 0");
         if (m.threads < 0) bad_option("smooth.threads", str(m.threads), ">= 0");
     }
     if (!std::isfinite(o.extract.iso)) bad_option("extract.iso", str(o.extract.iso), "a finite value");
     if (o.connectivity == Connectivity::Keep && o.target_faces > 0)
-        throw InvalidInput("smooth_mesh: target_faces (--target-faces) re-meshes: it needs connectivity remesh or auto");
+        throw InvalidInput(
+            "smooth_mesh: target_faces (--target-faces) re-meshes: it needs connectivity remesh or auto");
     if (!(o.max_error >= 0) || !std::isfinite(o.max_error)) bad_option("max_error", str(o.max_error), ">= 0");
     if (o.connectivity == Connectivity::Keep && o.max_error > 0)
         throw InvalidInput("smooth_mesh: max_error (--max-error) re-meshes: it needs connectivity remesh or auto");
@@ -153,8 +156,7 @@ int auto_resolution(const Mesh& mesh, const PipelineOptions& options) {
         try {
             check_memory(mesh, o);
             break;
-        } catch (const OutOfMemory&) {
-        }
+        } catch (const OutOfMemory&) {}
     }
     return res;
 }
@@ -210,8 +212,9 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
     r.seconds.extract = clock.lap();
     if (m.empty()) {
         if (o.smoothing)
-            throw InvalidInput("the surface vanished during smoothing (parts thinner than a few voxels "
-                               "shrink away); raise --resolution or lower --iterations");
+            throw InvalidInput(
+                "the surface vanished during smoothing (parts thinner than a few voxels "
+                "shrink away); raise --resolution or lower --iterations");
         throw InvalidInput("the volume holds no surface (every sample has the same sign)");
     }
     if (o.target_faces > 0 || o.max_error > 0) {
@@ -347,7 +350,8 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
         done = true;  // nothing to fall back to: the result is reported as it is
 #endif
         if (!done)
-            rep.fallback = "the quadric decimation's result was " + why + "; decimated with CGAL's edge collapse instead";
+            rep.fallback =
+                "the quadric decimation's result was " + why + "; decimated with CGAL's edge collapse instead";
     }
 #ifdef NORMALFLOW_HAS_MESHOPT
     if (decimator == Decimator::Meshoptimizer) {
@@ -377,9 +381,9 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
         const long long other_pairs = static_cast<long long>(cr.self_intersections);
         // CGAL's result, unless it breaks more than the quadric one did (at extreme ratios on folded
         // surfaces both can leave intersecting pairs): then the quadric one, with a warning below.
-        const bool cgal_better = broken_guarantee(input, mesh_report(other), -1).empty() &&
-                                 (other_pairs < rep.self_intersections ||
-                                  !broken_guarantee(input, mesh_report(result), -1).empty());
+        const bool cgal_better =
+            broken_guarantee(input, mesh_report(other), -1).empty() &&
+            (other_pairs < rep.self_intersections || !broken_guarantee(input, mesh_report(result), -1).empty());
         if (cgal_better) {
             result = std::move(other);
             rep.decimator = "cgal";
@@ -449,8 +453,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         // the noise moved its vertices across the surface only, not along it.
         detail::begin(progress, "fit");
         fitted = m;
-        r.fit = fit_mesh_to_volume(fitted, v, o.fit,
-                                   normal_map[0].values.empty() ? nullptr : &normal_map);
+        r.fit = fit_mesh_to_volume(fitted, v, o.fit, normal_map[0].values.empty() ? nullptr : &normal_map);
         r.fitted = true;
         if (!keep) keep = r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
         const double seconds = fit_clock.lap();
@@ -468,16 +471,18 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
             r.trim = trim_to_footprint(result.mesh, m, *q, h, 3 * std::max(h, model_length_scale(m)));
             r.trimmed = true;
             if (result.mesh.empty())
-                throw InvalidInput("nothing of the surface is left after trimming it to the open input's footprint; "
-                                   "--closed keeps the closed surface");
+                throw InvalidInput(
+                    "nothing of the surface is left after trimming it to the open input's footprint; "
+                    "--closed keeps the closed surface");
             const double seconds = trim_clock.lap();  // counted with the extraction
             r.seconds.extract += seconds;
             r.seconds.total += seconds;
         }
         if (m.has_colors()) transfer_colors(result.mesh, m, q ? *q : *(q = make_bvh_query(m)));
         if (m.has_texcoords())
-            r.warnings.push_back("texture coordinates dropped: re-meshing makes new vertices "
-                                 "(--connectivity keep keeps them)");
+            r.warnings.push_back(
+                "texture coordinates dropped: re-meshing makes new vertices "
+                "(--connectivity keep keeps them)");
         return result;
     }
     result.mesh = std::move(fitted);

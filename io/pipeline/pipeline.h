@@ -99,13 +99,13 @@ struct DecimationReport {
     double hausdorff = 0.0;
     double result_to_input = 0.0;
     double input_to_result = 0.0;
-    bool closed = false;                 ///< the result has no boundary edge
-    bool manifold = false;               ///< the result has no non-manifold edge or vertex
-    long long self_intersections = -1;   ///< pairs of intersecting faces; -1: not checked (a build without CGAL)
+    bool closed = false;                ///< the result has no boundary edge
+    bool manifold = false;              ///< the result has no non-manifold edge or vertex
+    long long self_intersections = -1;  ///< pairs of intersecting faces; -1: not checked (a build without CGAL)
     /// Decimator::Auto: pairs the quadric decimation left that CGAL's local repair then removed.
     std::size_t repaired_self_intersections = 0;
-    double seconds_decimate = 0.0;       ///< the decimation itself (both decimators' when CGAL re-did it)
-    double seconds = 0.0;                ///< the whole call: decimation, checks and distances
+    double seconds_decimate = 0.0;  ///< the decimation itself (both decimators' when CGAL re-did it)
+    double seconds = 0.0;           ///< the whole call: decimation, checks and distances
     std::vector<std::string> warnings;
 };
 
@@ -162,30 +162,30 @@ struct PipelineSeconds {
     double repair = 0;
     double voxelize = 0;  ///< memory check and scan conversion (distance-query build included)
     double smooth = 0;
-    double extract = 0;   ///< extraction, or the fit of the input's mesh when its connectivity is kept
+    double extract = 0;  ///< extraction, or the fit of the input's mesh when its connectivity is kept
     double decimate = 0;
     double total = 0;
 };
 
 /// What smooth_mesh (or one of its halves) did.
 struct PipelineReport {
-    bool repaired = false;       ///< repair ran (options.repair and a build with CGAL)
-    RepairReport repair;         ///< valid when repaired
+    bool repaired = false;                              ///< repair ran (options.repair and a build with CGAL)
+    RepairReport repair;                                ///< valid when repaired
     DistanceQuery distance = DistanceQuery::EngineBvh;  ///< the query used
-    ScanConvertOptions scan_options;  ///< the scan conversion's options as run (band rule applied)
-    double memory_estimate_bytes = 0; ///< estimated peak of the run (see check_memory)
+    ScanConvertOptions scan_options;                    ///< the scan conversion's options as run (band rule applied)
+    double memory_estimate_bytes = 0;                   ///< estimated peak of the run (see check_memory)
     ScanConvertReport scan;
-    double length_scale = 0;     ///< world units: the model length unit the engine ran with (0: not smoothed)
-    bool smoothed = false;       ///< smooth_volume ran
-    SmoothReport smooth;         ///< valid when smoothed
-    ExtractReport extract;       ///< valid when !connectivity_kept
+    double length_scale = 0;         ///< world units: the model length unit the engine ran with (0: not smoothed)
+    bool smoothed = false;           ///< smooth_volume ran
+    SmoothReport smooth;             ///< valid when smoothed
+    ExtractReport extract;           ///< valid when !connectivity_kept
     bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
-    bool fitted = false;         ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
-    FitReport fit;               ///< valid when fitted
-    bool trimmed = false;        ///< an open input's re-meshed result was trimmed to its footprint
-    TrimReport trim;             ///< valid when trimmed
-    bool decimated = false;      ///< decimation ran (target_faces > 0)
-    DecimationReport decimate;   ///< valid when decimated
+    bool fitted = false;             ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
+    FitReport fit;                   ///< valid when fitted
+    bool trimmed = false;            ///< an open input's re-meshed result was trimmed to its footprint
+    TrimReport trim;                 ///< valid when trimmed
+    bool decimated = false;          ///< decimation ran (target_faces > 0)
+    DecimationReport decimate;       ///< valid when decimated
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order

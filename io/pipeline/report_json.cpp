@@ -7,10 +7,14 @@ namespace normalflow {
 
 Json to_json(const RepairReport& r) {
     Json j = Json::object();
-    j.set("points_merged", r.points_merged).set("degenerate_removed", r.degenerate_removed)
-        .set("duplicates_removed", r.duplicates_removed).set("faces_reversed", r.faces_reversed)
-        .set("orientable", r.orientable).set("patches_inverted", r.patches_inverted)
-        .set("open_patches", r.open_patches).set("warnings", Json::array(r.warnings));
+    j.set("points_merged", r.points_merged)
+        .set("degenerate_removed", r.degenerate_removed)
+        .set("duplicates_removed", r.duplicates_removed)
+        .set("faces_reversed", r.faces_reversed)
+        .set("orientable", r.orientable)
+        .set("patches_inverted", r.patches_inverted)
+        .set("open_patches", r.open_patches)
+        .set("warnings", Json::array(r.warnings));
     return j;
 }
 
@@ -19,10 +23,15 @@ Json to_json(const ScanConvertReport& r) {
     j.set("dims", Json::array(std::vector<int>(r.grid.dims.begin(), r.grid.dims.end())))
         .set("voxel_size", r.grid.voxel_size)
         .set("origin", Json::array(std::vector<double>{r.grid.origin.x, r.grid.origin.y, r.grid.origin.z}))
-        .set("band_voxels", r.band_voxels).set("blocks", r.blocks).set("candidate_blocks", r.candidate_blocks)
-        .set("uncertain_sign", r.uncertain_sign).set("winding_evaluations", r.winding_evaluations)
-        .set("tile_conflict_blocks", r.tile_conflict_blocks).set("seconds_distance", r.seconds_distance)
-        .set("seconds_sign", r.seconds_sign).set("memory_bytes", r.memory_bytes)
+        .set("band_voxels", r.band_voxels)
+        .set("blocks", r.blocks)
+        .set("candidate_blocks", r.candidate_blocks)
+        .set("uncertain_sign", r.uncertain_sign)
+        .set("winding_evaluations", r.winding_evaluations)
+        .set("tile_conflict_blocks", r.tile_conflict_blocks)
+        .set("seconds_distance", r.seconds_distance)
+        .set("seconds_sign", r.seconds_sign)
+        .set("memory_bytes", r.memory_bytes)
         .set("warnings", Json::array(r.warnings));
     return j;
 }
@@ -54,18 +63,25 @@ Json to_json(const SmoothReport& r) {
         if (it.mu > 0) mu.push_back(it.mu);
     }
     Json j = Json::object();
-    j.set("iterations", r.iterations_run()).set("seconds_per_iteration", Json::array(seconds))
-        .set("band_voxels", Json::array(band)).set("allocated_voxels", Json::array(allocated))
+    j.set("iterations", r.iterations_run())
+        .set("seconds_per_iteration", Json::array(seconds))
+        .set("band_voxels", Json::array(band))
+        .set("allocated_voxels", Json::array(allocated))
         .set("normal_energy_start", Json::array(g0))
         .set("normal_energy", Json::array(g1))
         .set("refit_energy_start", Json::array(d0))
-        .set("refit_energy", Json::array(d1)).set("refit_steps", Json::array(steps))
+        .set("refit_energy", Json::array(d1))
+        .set("refit_steps", Json::array(steps))
         .set("refit_evaluations", Json::array(evals));
-    if (std::any_of(points.begin(), points.end(), [](std::size_t n) { return n > 0; })) j.set("filter_points", Json::array(points));
+    if (std::any_of(points.begin(), points.end(), [](std::size_t n) { return n > 0; }))
+        j.set("filter_points", Json::array(points));
     if (!mu.empty()) j.set("mu", Json::array(mu));
     j.set("volume_shift", Json::array(shift)).set("roughness", Json::array(rough));
-    j.set("stopped_unchanged", r.stopped_unchanged).set("stopped_smooth", r.stopped_smooth).set("seconds_normals", r.seconds_normals)
-        .set("seconds_refit", r.seconds_refit).set("seconds_reinit", r.seconds_reinit)
+    j.set("stopped_unchanged", r.stopped_unchanged)
+        .set("stopped_smooth", r.stopped_smooth)
+        .set("seconds_normals", r.seconds_normals)
+        .set("seconds_refit", r.seconds_refit)
+        .set("seconds_reinit", r.seconds_reinit)
         .set("warnings", Json::array(r.warnings));
     return j;
 }
@@ -78,40 +94,69 @@ Json to_json(const ExtractReport& r) {
 
 Json to_json(const cgal::CleanupReport& r) {
     Json j = Json::object();
-    j.set("faces_before", r.faces_before).set("faces_after", r.faces_after)
-        .set("vertices_before", r.vertices_before).set("vertices_after", r.vertices_after)
-        .set("degenerate_removed", r.degenerate_removed).set("components_removed", r.components_removed)
+    j.set("faces_before", r.faces_before)
+        .set("faces_after", r.faces_after)
+        .set("vertices_before", r.vertices_before)
+        .set("vertices_after", r.vertices_after)
+        .set("degenerate_removed", r.degenerate_removed)
+        .set("components_removed", r.components_removed)
         .set("faces_in_removed_components", r.faces_in_removed_components)
-        .set("components_reversed", r.components_reversed).set("hausdorff", r.hausdorff)
-        .set("result_to_input", r.result_to_input).set("input_to_result", r.input_to_result)
-        .set("closed", r.closed).set("manifold", r.manifold).set("self_intersections", r.self_intersections)
-        .set("self_intersections_found", r.self_intersections_found).set("seconds", r.seconds)
+        .set("components_reversed", r.components_reversed)
+        .set("hausdorff", r.hausdorff)
+        .set("result_to_input", r.result_to_input)
+        .set("input_to_result", r.input_to_result)
+        .set("closed", r.closed)
+        .set("manifold", r.manifold)
+        .set("self_intersections", r.self_intersections)
+        .set("self_intersections_found", r.self_intersections_found)
+        .set("seconds", r.seconds)
         .set("warnings", Json::array(r.warnings));
     return j;
 }
 
 Json to_json(const DecimationReport& r) {
     Json j = Json::object();
-    j.set("decimator", r.decimator).set("fallback", r.fallback).set("faces_before", r.faces_before)
-        .set("faces_after", r.faces_after).set("vertices_before", r.vertices_before)
-        .set("vertices_after", r.vertices_after).set("hausdorff", r.hausdorff)
-        .set("result_to_input", r.result_to_input).set("input_to_result", r.input_to_result)
-        .set("closed", r.closed).set("manifold", r.manifold).set("self_intersections", r.self_intersections)
-        .set("repaired_self_intersections", r.repaired_self_intersections).set("seconds_decimate", r.seconds_decimate).set("seconds", r.seconds).set("warnings", Json::array(r.warnings));
+    j.set("decimator", r.decimator)
+        .set("fallback", r.fallback)
+        .set("faces_before", r.faces_before)
+        .set("faces_after", r.faces_after)
+        .set("vertices_before", r.vertices_before)
+        .set("vertices_after", r.vertices_after)
+        .set("hausdorff", r.hausdorff)
+        .set("result_to_input", r.result_to_input)
+        .set("input_to_result", r.input_to_result)
+        .set("closed", r.closed)
+        .set("manifold", r.manifold)
+        .set("self_intersections", r.self_intersections)
+        .set("repaired_self_intersections", r.repaired_self_intersections)
+        .set("seconds_decimate", r.seconds_decimate)
+        .set("seconds", r.seconds)
+        .set("warnings", Json::array(r.warnings));
     return j;
 }
 
 Json to_json(const MeshReport& r) {
     Json j = Json::object();
-    j.set("vertices", r.vertices).set("input_vertices", r.input_vertices)
-        .set("referenced_vertices", r.referenced_vertices).set("triangles", r.faces).set("edges", r.edges)
-        .set("components", r.components).set("boundary_edges", r.boundary_edges)
+    j.set("vertices", r.vertices)
+        .set("input_vertices", r.input_vertices)
+        .set("referenced_vertices", r.referenced_vertices)
+        .set("triangles", r.faces)
+        .set("edges", r.edges)
+        .set("components", r.components)
+        .set("boundary_edges", r.boundary_edges)
         .set("boundary_loops", r.boundary_loops)
-        .set("non_manifold_edges", r.non_manifold_edges).set("non_manifold_vertices", r.non_manifold_vertices)
-        .set("degenerate_faces", r.degenerate_faces).set("collapsed_faces", r.collapsed_faces)
-        .set("duplicate_faces", r.duplicate_faces).set("inconsistent_edges", r.inconsistent_edges)
-        .set("closed", r.closed).set("manifold", r.manifold).set("oriented", r.oriented)
-        .set("euler_characteristic", r.euler_characteristic).set("area", r.area).set("volume", r.volume);
+        .set("non_manifold_edges", r.non_manifold_edges)
+        .set("non_manifold_vertices", r.non_manifold_vertices)
+        .set("degenerate_faces", r.degenerate_faces)
+        .set("collapsed_faces", r.collapsed_faces)
+        .set("duplicate_faces", r.duplicate_faces)
+        .set("inconsistent_edges", r.inconsistent_edges)
+        .set("closed", r.closed)
+        .set("manifold", r.manifold)
+        .set("oriented", r.oriented)
+        .set("euler_characteristic", r.euler_characteristic)
+        .set("area", r.area)
+        .set("volume", r.volume);
     Json box = Json::array();
     for (double c : {r.bbox.min.x, r.bbox.min.y, r.bbox.min.z, r.bbox.max.x, r.bbox.max.y, r.bbox.max.z}) box.push(c);
     j.set("bbox", box).set("warnings", Json::array(r.warnings));
@@ -129,9 +174,12 @@ Json to_json(const PipelineReport& r) {
     j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");
     if (r.fitted) {
         Json f = Json::object();
-        f.set("vertices", r.fit.vertices).set("boundary_vertices", r.fit.boundary_vertices)
-            .set("outside_band", r.fit.outside_band).set("mean_distance", r.fit.mean_distance)
-            .set("max_distance", r.fit.max_distance).set("mean_face_angle_deg", r.fit.mean_face_angle_deg);
+        f.set("vertices", r.fit.vertices)
+            .set("boundary_vertices", r.fit.boundary_vertices)
+            .set("outside_band", r.fit.outside_band)
+            .set("mean_distance", r.fit.mean_distance)
+            .set("max_distance", r.fit.max_distance)
+            .set("mean_face_angle_deg", r.fit.mean_face_angle_deg);
         j.set("fit", f);
     }
     if (!r.connectivity_kept) j.set("extract", to_json(r.extract));
@@ -142,8 +190,12 @@ Json to_json(const PipelineReport& r) {
     }
     if (r.decimated) j.set("decimate", to_json(r.decimate));
     Json s = Json::object();
-    s.set("repair", r.seconds.repair).set("voxelize", r.seconds.voxelize).set("smooth", r.seconds.smooth)
-        .set("extract", r.seconds.extract).set("decimate", r.seconds.decimate).set("total", r.seconds.total);
+    s.set("repair", r.seconds.repair)
+        .set("voxelize", r.seconds.voxelize)
+        .set("smooth", r.seconds.smooth)
+        .set("extract", r.seconds.extract)
+        .set("decimate", r.seconds.decimate)
+        .set("total", r.seconds.total);
     j.set("seconds", s).set("peak_memory_bytes", r.peak_memory_bytes).set("warnings", Json::array(r.warnings));
     return j;
 }
@@ -151,29 +203,51 @@ Json to_json(const PipelineReport& r) {
 Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double voxel_size) {
     const ScanConvertOptions& scan = r.scan_options;  // as run: the automatic resolution and the band rule applied
     SmoothOptions s = o.smooth;  // with the length unit as run, in voxels, for the mode's refit steps
-    if (s.length_scale == 0 && r.length_scale > 0 && voxel_size > 0) s.length_scale = float(r.length_scale / voxel_size);
+    if (s.length_scale == 0 && r.length_scale > 0 && voxel_size > 0)
+        s.length_scale = float(r.length_scale / voxel_size);
     Json j = Json::object();
-    j.set("resolution", scan.voxel_size > 0 || !r.scan.grid.voxel_size ? 0 : scan.resolution).set("voxel_size", voxel_size)
-        .set("band", scan.half_width).set("shell", scan.shell_thickness).set("repair", o.repair)
-        .set("distance", to_string(o.distance)).set("max_memory", static_cast<unsigned long long>(o.max_memory_bytes))
+    j.set("resolution", scan.voxel_size > 0 || !r.scan.grid.voxel_size ? 0 : scan.resolution)
+        .set("voxel_size", voxel_size)
+        .set("band", scan.half_width)
+        .set("shell", scan.shell_thickness)
+        .set("repair", o.repair)
+        .set("distance", to_string(o.distance))
+        .set("max_memory", static_cast<unsigned long long>(o.max_memory_bytes))
         .set("threads", scan.threads);
     if (o.smoothing) {
         j.set("mode", to_string(s.mode))
             .set("iterations", s.iterations > 0 ? s.iterations : default_iterations(s.mode))
             .set("normal_steps", s.normal_steps > 0 ? s.normal_steps : default_normal_steps(s.mode))
-            .set("length_scale", r.length_scale).set("sigma_spatial", s.sigma_spatial).set("sigma_range", s.sigma_range)
-            .set("tv_lambda", s.tv_lambda).set("mu", s.mu).set("alpha", s.alpha)
-            .set("presmooth", s.conductance_presmooth_steps).set("mu_robust", s.mu_robust).set("normal_dt", s.normal_dt)
-            .set("refit_steps", s.refit_max_steps > 0 ? s.refit_max_steps : default_refit_steps(s)).set("refit_dt", s.refit_dt)
-            .set("refit_tolerance", s.refit_tolerance).set("refit_super_steps", s.refit_super_steps)
-            .set("extend_by_gather", s.extend_by_gather).set("all_samples", !s.thin_samples)
-            .set("preserve_volume", s.preserve_volume).set("second_order", s.second_order_term)
+            .set("length_scale", r.length_scale)
+            .set("sigma_spatial", s.sigma_spatial)
+            .set("sigma_range", s.sigma_range)
+            .set("tv_lambda", s.tv_lambda)
+            .set("mu", s.mu)
+            .set("alpha", s.alpha)
+            .set("presmooth", s.conductance_presmooth_steps)
+            .set("mu_robust", s.mu_robust)
+            .set("normal_dt", s.normal_dt)
+            .set("refit_steps", s.refit_max_steps > 0 ? s.refit_max_steps : default_refit_steps(s))
+            .set("refit_dt", s.refit_dt)
+            .set("refit_tolerance", s.refit_tolerance)
+            .set("refit_super_steps", s.refit_super_steps)
+            .set("extend_by_gather", s.extend_by_gather)
+            .set("all_samples", !s.thin_samples)
+            .set("preserve_volume", s.preserve_volume)
+            .set("second_order", s.second_order_term)
             .set("active_band", s.active_band);
     }
-    j.set("connectivity", to_string(o.connectivity)).set("closed", o.closed).set("fit_to_normal_map", o.fit_to_normal_map)
-        .set("projection_steps", o.fit.projection_steps).set("relax_steps", o.fit.relax_steps)
-        .set("fit_steps", o.fit.vertex_steps).set("boundary_rings", o.fit.boundary_rings).set("iso", o.extract.iso)
-        .set("target_faces", o.target_faces).set("max_error", o.max_error).set("decimator", to_string(o.decimator));
+    j.set("connectivity", to_string(o.connectivity))
+        .set("closed", o.closed)
+        .set("fit_to_normal_map", o.fit_to_normal_map)
+        .set("projection_steps", o.fit.projection_steps)
+        .set("relax_steps", o.fit.relax_steps)
+        .set("fit_steps", o.fit.vertex_steps)
+        .set("boundary_rings", o.fit.boundary_rings)
+        .set("iso", o.extract.iso)
+        .set("target_faces", o.target_faces)
+        .set("max_error", o.max_error)
+        .set("decimator", to_string(o.decimator));
     return j;
 }
 

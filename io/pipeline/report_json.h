@@ -8,8 +8,8 @@
 #include "extract/extract_surface.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
-#include "io/util/json.h"
 #include "io/pipeline/pipeline.h"
+#include "io/util/json.h"
 #include "normals/smooth.h"
 #include "sdf/scan_convert.h"
 

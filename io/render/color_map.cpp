@@ -14,8 +14,8 @@ namespace normalflow {
 namespace {
 
 // matplotlib's viridis sampled at 9 evenly spaced points (R's viridisLite::viridis(9)).
-constexpr Rgb8 kViridis[] = {{68, 1, 84},    {71, 45, 123},  {59, 82, 139},   {44, 114, 142}, {33, 144, 140},
-                             {39, 173, 129}, {92, 200, 99},  {170, 220, 50},  {253, 231, 37}};
+constexpr Rgb8 kViridis[] = {{68, 1, 84},    {71, 45, 123}, {59, 82, 139},  {44, 114, 142}, {33, 144, 140},
+                             {39, 173, 129}, {92, 200, 99}, {170, 220, 50}, {253, 231, 37}};
 // ColorBrewer RdBu, 7 classes, reversed: blue (low) – white – red (high).
 constexpr Rgb8 kDiverging[] = {{33, 102, 172},  {103, 169, 207}, {209, 229, 240}, {247, 247, 247},
                                {253, 219, 199}, {239, 138, 98},  {178, 24, 43}};
@@ -78,9 +78,7 @@ Rgb8 map_color(ColorMap map, double t) {
     return interpolate(kGray, t);
 }
 
-int text_width(const std::string& text, int scale) {
-    return text.empty() ? 0 : int(text.size()) * 6 * scale - scale;
-}
+int text_width(const std::string& text, int scale) { return text.empty() ? 0 : int(text.size()) * 6 * scale - scale; }
 
 void draw_text(Image& img, int x, int y, const std::string& text, Rgb8 ink, int scale) {
     scale = std::max(1, scale);

@@ -25,7 +25,7 @@ struct LegendOptions {
     int height = 48;                 ///< image height, pixels, in [32, 16384]; the bar takes what the labels leave
     Rgb8 background{255, 255, 255};  ///< image background
     Rgb8 ink{0, 0, 0};               ///< border, ticks and labels
-    int ticks = 5;                   ///< evenly spaced ticks including both ends, in [2, 11]; ends and middle are labelled
+    int ticks = 5;  ///< evenly spaced ticks including both ends, in [2, 11]; ends and middle are labelled
 };
 
 /// A horizontal colour bar from lo (left) to hi (right) with ticks and numeric labels ("%.3g", drawn with a

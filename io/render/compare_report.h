@@ -15,8 +15,8 @@ namespace normalflow {
 
 /// Options of write_compare_report.
 struct CompareReportOptions {
-    bool pictures = true;   ///< also render the PNG pictures and write index.html
-    int picture_size = 400; ///< width and height of each picture, pixels, 32..4096
+    bool pictures = true;    ///< also render the PNG pictures and write index.html
+    int picture_size = 400;  ///< width and height of each picture, pixels, 32..4096
 };
 
 /// What write_compare_report did.

@@ -14,12 +14,13 @@ namespace normalflow {
 
 std::vector<float> vertex_distances(const Mesh& m, const ClosestTriangleQuery& reference) {
     std::vector<float> d(m.positions.size(), 0.0f);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) {
-            const ClosestHit h = reference.closest(Vec3d(m.positions[i]));
-            d[i] = h.found() ? float(std::sqrt(h.squared_distance)) : 0.0f;
-        }
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, d.size(), 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                              const ClosestHit h = reference.closest(Vec3d(m.positions[i]));
+                              d[i] = h.found() ? float(std::sqrt(h.squared_distance)) : 0.0f;
+                          }
+                      });
     return d;
 }
 
@@ -34,7 +35,8 @@ ComparisonPictures write_comparison_pictures(const std::string& dir, const Mesh&
     const std::filesystem::path folder = std::filesystem::path(dir) / opt.subfolder;
     std::error_code ec;
     std::filesystem::create_directories(folder, ec);
-    if (ec) throw IoError("write_comparison_pictures: " + folder.string() + ": cannot create the folder: " + ec.message());
+    if (ec)
+        throw IoError("write_comparison_pictures: " + folder.string() + ": cannot create the folder: " + ec.message());
     const std::string prefix = opt.subfolder.empty() ? std::string() : opt.subfolder + "/";
 
     // Meshes: the reference (index 0) and the candidates; distances of each to the reference.

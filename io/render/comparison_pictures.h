@@ -20,7 +20,7 @@ std::vector<float> vertex_distances(const Mesh& m, const ClosestTriangleQuery& r
 
 /// Options of write_comparison_pictures.
 struct ComparisonPicturesOptions {
-    RenderOptions render;            ///< image size, shading, colours (vertex_scalars and the range are set per picture)
+    RenderOptions render;  ///< image size, shading, colours (vertex_scalars and the range are set per picture)
     Projection projection = Projection::Orthographic;  ///< of the three cameras
     std::string subfolder = "pictures";  ///< under dir, where the PNG files go; "" puts them in dir itself
     /// Colour range of the distance pictures: [0, distance_max] world units. <= 0 (default): the largest
@@ -37,11 +37,11 @@ struct MeshPictures {
 
 /// What write_comparison_pictures wrote.
 struct ComparisonPictures {
-    std::vector<std::string> views;  ///< "front", "side", "oblique"
+    std::vector<std::string> views;    ///< "front", "side", "oblique"
     std::vector<MeshPictures> meshes;  ///< the reference first, then the candidates in order
-    std::string legend;              ///< the legend bar PNG, relative to dir
-    double distance_max = 0.0;       ///< top of the colour range, world units
-    double seconds = 0.0;            ///< wall time
+    std::string legend;                ///< the legend bar PNG, relative to dir
+    double distance_max = 0.0;         ///< top of the colour range, world units
+    double seconds = 0.0;              ///< wall time
 };
 
 /// Renders the reference and every candidate from the same three viewpoints with cameras fitted to the

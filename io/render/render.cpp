@@ -180,8 +180,8 @@ Image render_mesh(const Mesh& m, const Camera& camera, const RenderOptions& opt)
                 const double shade = opt.ambient + (1.0 - opt.ambient) * lambert;
                 Rgb8 base = opt.base_color;
                 if (scalars) {
-                    const double v = p0 * opt.vertex_scalars[t[0]] + p1 * opt.vertex_scalars[t[1]] +
-                                     p2 * opt.vertex_scalars[t[2]];
+                    const double v =
+                        p0 * opt.vertex_scalars[t[0]] + p1 * opt.vertex_scalars[t[1]] + p2 * opt.vertex_scalars[t[2]];
                     base = map_color(opt.color_map, (v - opt.scalar_min) * inv_range);
                 }
                 img.set(px, py, {to_byte(base.r * shade), to_byte(base.g * shade), to_byte(base.b * shade)});

@@ -20,9 +20,9 @@ enum class Projection { Orthographic, Perspective };
 /// target (orthographic) or fov_y_deg degrees (perspective); the longer side is widened by the aspect ratio.
 struct Camera {
     Projection projection = Projection::Orthographic;
-    Vec3d eye{0, 0, 5};     ///< camera position, world units
-    Vec3d target{0, 0, 0};  ///< point seen at the image centre, world units; != eye
-    Vec3d up{0, 1, 0};      ///< world direction shown upwards; not parallel to target − eye
+    Vec3d eye{0, 0, 5};      ///< camera position, world units
+    Vec3d target{0, 0, 0};   ///< point seen at the image centre, world units; != eye
+    Vec3d up{0, 1, 0};       ///< world direction shown upwards; not parallel to target − eye
     double half_size = 1.0;  ///< orthographic: half the visible extent along the shorter image side, world units, > 0
     double fov_deg = 30.0;   ///< perspective: full field of view along the shorter image side, degrees, in (0, 170]
 };
@@ -42,12 +42,12 @@ enum class Shading { Flat, Smooth };
 
 /// Options of render_mesh.
 struct RenderOptions {
-    int width = 400;                  ///< pixels, in [1, 16384]
-    int height = 400;                 ///< pixels, in [1, 16384]
+    int width = 400;   ///< pixels, in [1, 16384]
+    int height = 400;  ///< pixels, in [1, 16384]
     Shading shading = Shading::Smooth;
-    Rgb8 background{255, 255, 255};   ///< where no triangle is seen
-    Rgb8 base_color{190, 190, 200};   ///< surface colour when there are no scalars
-    double ambient = 0.2;             ///< fraction of the colour that is unlit, in [0, 1]
+    Rgb8 background{255, 255, 255};  ///< where no triangle is seen
+    Rgb8 base_color{190, 190, 200};  ///< surface colour when there are no scalars
+    double ambient = 0.2;            ///< fraction of the colour that is unlit, in [0, 1]
     /// Direction towards the light in camera coordinates (x right, y up, z towards the viewer), any
     /// length > 0. {0, 0, 1} is a headlight. Lighting is two-sided (|n · l|): orientation does not matter.
     Vec3d light{0.35, 0.45, 1.0};
@@ -56,8 +56,8 @@ struct RenderOptions {
     /// (clamped) and shaded like base_color.
     std::span<const float> vertex_scalars;
     ColorMap color_map = ColorMap::Viridis;
-    double scalar_min = 0.0;          ///< value drawn as the map's first colour
-    double scalar_max = 1.0;          ///< value drawn as the map's last colour, > scalar_min
+    double scalar_min = 0.0;  ///< value drawn as the map's first colour
+    double scalar_max = 1.0;  ///< value drawn as the map's last colour, > scalar_min
 };
 
 /// Renders m seen by camera: every triangle is projected, rasterised at pixel centres (a pixel is

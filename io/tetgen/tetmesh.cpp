@@ -4,9 +4,9 @@
 #include <tetgen.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
-#include <cctype>
 #include <cstdarg>
 #include <cstdio>
 #include <string>
@@ -32,7 +32,8 @@ double norm3(const Vec3d& a) { return std::sqrt(dot3(a, a)); }
 
 /// Smallest of the six dihedral angles of tetrahedron (p0..p3), radians.
 double min_dihedral(const Vec3d p[4]) {
-    static constexpr int kEdges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2}, {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+    static constexpr int kEdges[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2},
+                                         {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
     double best = 1e9;
     for (const auto& e : kEdges) {
         const Vec3d ab = sub(p[e[1]], p[e[0]]);
@@ -52,7 +53,8 @@ void validate(const Mesh& m) {
                            " boundary edges); TetGen needs a closed surface");
     if (!r.manifold)
         throw InvalidInput("tetrahedralize: the surface is not manifold (" + std::to_string(r.non_manifold_edges) +
-                           " non-manifold edges, " + std::to_string(r.non_manifold_vertices) + " non-manifold vertices)");
+                           " non-manifold edges, " + std::to_string(r.non_manifold_vertices) +
+                           " non-manifold vertices)");
     if (r.degenerate_faces > 0 || r.duplicate_faces > 0)
         throw InvalidInput("tetrahedralize: the surface has " + std::to_string(r.degenerate_faces) +
                            " degenerate and " + std::to_string(r.duplicate_faces) + " duplicate faces");
@@ -74,7 +76,8 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
         throw InvalidInput("tetrahedralize: min_dihedral_deg must be in [0, 70), got " +
                            std::to_string(opt.min_dihedral_deg));
     if (opt.optimize_level < 0 || opt.optimize_level > 10)
-        throw InvalidInput("tetrahedralize: optimize_level must be in 0..10, got " + std::to_string(opt.optimize_level));
+        throw InvalidInput("tetrahedralize: optimize_level must be in 0..10, got " +
+                           std::to_string(opt.optimize_level));
     validate(m_in);
     const Mesh m = weld_exact(m_in);
 
@@ -101,7 +104,8 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
     if (opt.max_volume > 0)
         std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%da%.9gQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level,
                       opt.max_volume);
-    else std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%dQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level);
+    else
+        std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%dQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level);
     // TetGen runs in a forked child (io/util/isolate.h): a crash on its error paths becomes an
     // IoError instead of ending the process. TetGen is single-threaded, as the child requires.
     const auto run = [&](const std::string& switches) {
@@ -156,7 +160,8 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
     t.tets = reader.get_array<std::array<std::uint32_t, 4>>();
     for (const auto& tt : t.tets)
         for (std::uint32_t v : tt)
-            if (v >= t.points.size()) throw NumericalError("tetrahedralize: TetGen returned a tetrahedron index out of range");
+            if (v >= t.points.size())
+                throw NumericalError("tetrahedralize: TetGen returned a tetrahedron index out of range");
 
     if (report) {
         TetmeshReport r;
@@ -212,9 +217,10 @@ void write_tetmesh(const std::string& path, const TetMesh& t) {
         f.commit();
     } else if (ext == ".vtu") {
         AtomicFile f(path, "write_tetmesh");
-        put(f, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-               "<UnstructuredGrid>\n<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n<Points>\n"
-               "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n",
+        put(f,
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+            "<UnstructuredGrid>\n<Piece NumberOfPoints=\"%zu\" NumberOfCells=\"%zu\">\n<Points>\n"
+            "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n",
             t.points.size(), t.tets.size());
         for (const auto& p : t.points) put(f, "%.17g %.17g %.17g\n", p[0], p[1], p[2]);
         put(f, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n");

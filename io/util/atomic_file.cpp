@@ -19,12 +19,11 @@ std::string errno_text() { return std::strerror(errno); }
 AtomicFile::AtomicFile(std::string path, std::string_view who) : path_(std::move(path)), who_(who) {
     if (path_.empty()) throw IoError(who_ + ": empty output path");
     std::error_code ec;
-    if (std::filesystem::is_directory(path_, ec))
-        throw IoError(who_ + ": " + path_ + ": is a directory");
+    if (std::filesystem::is_directory(path_, ec)) throw IoError(who_ + ": " + path_ + ": is a directory");
     const std::filesystem::path p(path_);
     const std::string name = p.filename().string();
-    tmp_ = (p.parent_path() / ("." + name + ".tmp" + std::to_string(::getpid()) + "-" +
-                               std::to_string(g_counter.fetch_add(1))))
+    tmp_ = (p.parent_path() /
+            ("." + name + ".tmp" + std::to_string(::getpid()) + "-" + std::to_string(g_counter.fetch_add(1))))
                .string();
     f_ = std::fopen(tmp_.c_str(), "wb");
     if (!f_) throw IoError(who_ + ": " + path_ + ": cannot write (" + errno_text() + ")");

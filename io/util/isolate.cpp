@@ -1,11 +1,11 @@
 #include "io/util/isolate.h"
 
+#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
-#include <fcntl.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -151,9 +151,7 @@ bool isolation_disabled() {
     return v && *v && std::strcmp(v, "0") != 0;
 }
 
-void ByteReader::fail() const {
-    throw IoError(std::string(what_) + ": the isolated process sent a truncated result");
-}
+void ByteReader::fail() const { throw IoError(std::string(what_) + ": the isolated process sent a truncated result"); }
 
 void put_mesh(ByteWriter& w, const Mesh& m) {
     w.put_array(m.positions);
@@ -180,7 +178,8 @@ std::string run_isolated(std::string_view what, const std::function<std::string(
 
     int fds[2];
     if (::pipe2(fds, O_CLOEXEC) != 0)
-        throw IoError(std::string(what) + ": cannot create a pipe for the isolated process (" + std::strerror(errno) + ")");
+        throw IoError(std::string(what) + ": cannot create a pipe for the isolated process (" + std::strerror(errno) +
+                      ")");
     Fd rd(fds[0]), wr(fds[1]);
 
     Child child;

@@ -43,8 +43,7 @@ namespace normalflow {
 /// Cost: one fork() (copy-on-write; about 0.1-1 ms plus page-table copying for a large parent) and
 /// one copy of the result through the pipe (about 1-3 GB/s). Thread-safe: concurrent calls from
 /// several threads each get their own child and pipe.
-std::string run_isolated(std::string_view what, const std::function<std::string()>& work,
-                         double timeout_seconds = 0);
+std::string run_isolated(std::string_view what, const std::function<std::string()>& work, double timeout_seconds = 0);
 
 /// True when NORMALFLOW_NO_ISOLATION is set to a non-empty value other than "0".
 bool isolation_disabled();
@@ -94,7 +93,9 @@ public:
         const auto n = get<std::uint64_t>();
         if (n > p_.size() / sizeof(T)) fail();
         std::vector<T> v(static_cast<std::size_t>(n));
-        if (n) std::memcpy(v.data(), take(static_cast<std::size_t>(n) * sizeof(T)), static_cast<std::size_t>(n) * sizeof(T));
+        if (n)
+            std::memcpy(v.data(), take(static_cast<std::size_t>(n) * sizeof(T)),
+                        static_cast<std::size_t>(n) * sizeof(T));
         return v;
     }
     std::string get_string() {

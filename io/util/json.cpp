@@ -56,7 +56,10 @@ void Json::dump_to(std::string& out) const {
         case Kind::Bool: out += b_ ? "true" : "false"; break;
         case Kind::Integer: out += std::to_string(i_); break;
         case Kind::Number: {
-            if (!std::isfinite(d_)) { out += "null"; break; }
+            if (!std::isfinite(d_)) {
+                out += "null";
+                break;
+            }
             char buf[32];
             auto r = std::to_chars(buf, buf + sizeof buf, d_);
             out.append(buf, r.ptr);

@@ -28,8 +28,16 @@ public:
     Json(std::string s) : kind_(Kind::String), s_(std::move(s)) {}
     Json(std::string_view s) : kind_(Kind::String), s_(s) {}
 
-    static Json object() { Json j; j.kind_ = Kind::Object; return j; }
-    static Json array() { Json j; j.kind_ = Kind::Array; return j; }
+    static Json object() {
+        Json j;
+        j.kind_ = Kind::Object;
+        return j;
+    }
+    static Json array() {
+        Json j;
+        j.kind_ = Kind::Array;
+        return j;
+    }
     template <class T>
     static Json array(const std::vector<T>& v) {
         Json j = array();

@@ -47,14 +47,19 @@ Json to_json(const CompareReport& a) {
         const MeshComparison& c = rows.front().comparison;
         Json ref = Json::object();
         ref.set("bbox_diagonal", c.reference_diagonal).set("area", c.area_reference).set("volume", c.volume_reference);
-        ref.set("components", c.components_reference).set("closed", c.closed_reference).set("manifold", c.manifold_reference);
+        ref.set("components", c.components_reference)
+            .set("closed", c.closed_reference)
+            .set("manifold", c.manifold_reference);
         ref.set("feature_edges", c.crease.feature_edges).set("feature_length", c.crease.feature_length);
         j.set("reference_stats", ref);
     }
     Json proto = Json::object();
-    proto.set("samples_per_mesh", a.options.sampling.samples).set("seed", static_cast<unsigned long long>(a.options.sampling.seed));
-    proto.set("crease_angle_deg", a.options.crease.angle_deg).set("crease_radius_relative", a.options.crease.radius_relative);
-    if (a.options.correspondence) proto.set("correspondence", true);  // absent: the output without the flag is unchanged
+    proto.set("samples_per_mesh", a.options.sampling.samples)
+        .set("seed", static_cast<unsigned long long>(a.options.sampling.seed));
+    proto.set("crease_angle_deg", a.options.crease.angle_deg)
+        .set("crease_radius_relative", a.options.crease.radius_relative);
+    if (a.options.correspondence)
+        proto.set("correspondence", true);  // absent: the output without the flag is unchanged
     j.set("protocol", proto);
     Json arr = Json::array();
     for (const CompareReportRow& r : rows) arr.push(row_json(r));

@@ -27,9 +27,9 @@ enum class GlbEncoding {
 
 /// Options for writing meshes.
 struct WriteOptions {
-    bool binary = true;                   ///< PLY/STL: binary (default) or ASCII
-    GlbEncoding glb = GlbEncoding::Plain; ///< .glb: plain (default) or Draco-compressed
-    DracoOptions draco{};                 ///< .drc, and .glb with GlbEncoding::Draco
+    bool binary = true;                    ///< PLY/STL: binary (default) or ASCII
+    GlbEncoding glb = GlbEncoding::Plain;  ///< .glb: plain (default) or Draco-compressed
+    DracoOptions draco{};                  ///< .drc, and .glb with GlbEncoding::Draco
 };
 
 }  // namespace normalflow

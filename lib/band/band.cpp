@@ -19,9 +19,8 @@ Band::Band(const Volume& v) : grid_(v.grid) {
     coords_ = v.block_coords;
     const float inv_h = float(1.0 / v.grid.voxel_size);
     phi_.resize(v.values.size());
-    for_samples(v.values.size(), [&](std::size_t i) {
-        phi_[i] = std::clamp(v.values[i] * inv_h, -kHalfWidth, kHalfWidth);
-    });
+    for_samples(v.values.size(),
+                [&](std::size_t i) { phi_[i] = std::clamp(v.values[i] * inv_h, -kHalfWidth, kHalfWidth); });
 }
 
 std::vector<std::int32_t> Band::all_blocks() const {
@@ -132,8 +131,7 @@ void Band::update_band() {
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
                     const int x = c[0] + dx, y = c[1] + dy, z = c[2] + dz;
-                    if (x < 0 || y < 0 || z < 0 || x >= block_dims_[0] || y >= block_dims_[1] ||
-                        z >= block_dims_[2])
+                    if (x < 0 || y < 0 || z < 0 || x >= block_dims_[0] || y >= block_dims_[1] || z >= block_dims_[2])
                         continue;
                     req[tindex(x, y, z)] = 1;
                 }
@@ -166,16 +164,17 @@ void Band::update_band() {
                 }
             }
     // the blocks' values, in parallel (their first writes to a fresh buffer fault)
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, source.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t slot = r.begin(); slot != r.end(); ++slot) {
-            float* dst = phi.data() + slot * kBlockVoxels;
-            const std::int32_t old = source[slot];
-            if (old >= 0)
-                std::memcpy(dst, phi_.data() + std::size_t(old) * kBlockVoxels, sizeof(float) * kBlockVoxels);
-            else
-                std::fill(dst, dst + kBlockVoxels, old == kBlockInside ? -kHalfWidth : kHalfWidth);
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, source.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t slot = r.begin(); slot != r.end(); ++slot) {
+                float* dst = phi.data() + slot * kBlockVoxels;
+                const std::int32_t old = source[slot];
+                if (old >= 0)
+                    std::memcpy(dst, phi_.data() + std::size_t(old) * kBlockVoxels, sizeof(float) * kBlockVoxels);
+                else
+                    std::fill(dst, dst + kBlockVoxels, old == kBlockInside ? -kHalfWidth : kHalfWidth);
+            }
+        });
     table_ = std::move(table);
     coords_ = std::move(coords);
     std::swap(phi_, work_.phi_next);
@@ -195,10 +194,9 @@ void Band::update_band() {
     fit_samples(work_.hn, n);
     fit_samples(mask_, n);
     nbh_.resize(nblocks());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks(), 64),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t b = r.begin(); b != r.end(); ++b) make_neighbourhood(b, nbh_[b]);
-                      });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t b = r.begin(); b != r.end(); ++b) make_neighbourhood(b, nbh_[b]);
+    });
 }
 
 void Band::build_active(float active_band) {

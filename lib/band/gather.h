@@ -21,9 +21,7 @@ inline void gather_k(const Neighbourhood& n, const float* const (&f)[K], float t
     auto src = [&](std::int32_t s, int idx) -> std::ptrdiff_t {  // offset, or -1 / -2 for a tile
         return s >= 0 ? std::ptrdiff_t(s) * kBlockVoxels + idx : std::ptrdiff_t(s);
     };
-    auto value = [&](const float* fk, std::ptrdiff_t o) {
-        return o >= 0 ? fk[o] : (o == kBlockInside ? t_in : t_out);
-    };
+    auto value = [&](const float* fk, std::ptrdiff_t o) { return o >= 0 ? fk[o] : (o == kBlockInside ? t_in : t_out); };
     for (int z = 0; z < L; ++z) {
         const int nz = n.nb[2][z], lz = n.li[2][z];
         for (int y = 0; y < L; ++y) {

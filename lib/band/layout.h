@@ -14,14 +14,14 @@
 
 namespace normalflow::engine {
 
-constexpr float kHalfWidth = 8.0f;      // engine band half width, voxels
-constexpr float kMaxDt = 1.0f / 6.0f;   // explicit stability bound of the 3-D second-order operators
+constexpr float kHalfWidth = 8.0f;     // engine band half width, voxels
+constexpr float kMaxDt = 1.0f / 6.0f;  // explicit stability bound of the 3-D second-order operators
 // Reinitialisation stops when no sample moved by more than this in a Jacobi pass (voxels). The
 // passes reach the far end of the band within ~15 passes; after that the values creep by ~2e-5 per
 // pass along chains of nearly equal distances (fandisk at 256: all 24 passes ran on 90% of the
 // blocks before this tolerance). What is left is below 1e-3 voxel.
 constexpr float kReinitTolerance = 1e-3f;
-constexpr int L = 10;                   // local buffer: 8 + 2 halo
+constexpr int L = 10;  // local buffer: 8 + 2 halo
 constexpr int L2 = L * L;
 constexpr int L3 = L * L * L;
 constexpr int kStride[3] = {1, L, L2};
@@ -48,8 +48,8 @@ struct Neighbourhood {
     std::int32_t slot[27];
     std::uint8_t nb[3][L];
     std::uint8_t li[3][L];
-    int ext[3];            // in-grid extent of the block itself
-    bool contiguous_x;     // local x 0..7 read the block's own row unclamped (a memcpy)
+    int ext[3];         // in-grid extent of the block itself
+    bool contiguous_x;  // local x 0..7 read the block's own row unclamped (a memcpy)
 };
 
 /// Per-thread scratch of the kernels (a view into a thread-local buffer).

@@ -5,10 +5,10 @@
 
 #include <algorithm>
 #include <atomic>
-#include <vector>
 #include <cmath>
 #include <cstring>
 #include <utility>
+#include <vector>
 
 #include "band/gather.h"
 #include "band/iterate.h"

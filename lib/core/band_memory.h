@@ -55,7 +55,9 @@ struct HugePageAllocator {
             std::allocator<T>().deallocate(p, n);
     }
     template <class U>
-    bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
+    bool operator==(const HugePageAllocator<U>&) const noexcept {
+        return true;
+    }
 };
 
 /// HugePageAllocator whose resize() leaves new elements uninitialised (default-initialised): for

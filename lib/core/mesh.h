@@ -33,9 +33,9 @@ using TexCoord = std::array<float, 2>;
 struct Mesh {
     std::vector<Vec3f> positions;
     std::vector<Tri> triangles;
-    std::vector<Vec3f> normals{};      ///< unit vertex normals (zero where undefined), or empty
-    std::vector<Rgba8> colors{};       ///< vertex colours, or empty
-    std::vector<TexCoord> texcoords{}; ///< vertex texture coordinates, or empty
+    std::vector<Vec3f> normals{};       ///< unit vertex normals (zero where undefined), or empty
+    std::vector<Rgba8> colors{};        ///< vertex colours, or empty
+    std::vector<TexCoord> texcoords{};  ///< vertex texture coordinates, or empty
 
     bool empty() const { return triangles.empty(); }
     bool has_normals() const { return !normals.empty(); }
@@ -58,7 +58,10 @@ struct Box3d {
     Vec3d size() const { return empty() ? Vec3d{} : max - min; }
     Vec3d center() const { return (min + max) * 0.5; }
     double diagonal() const { return empty() ? 0.0 : norm(max - min); }
-    void extend(const Vec3d& p) { min = cwise_min(min, p); max = cwise_max(max, p); }
+    void extend(const Vec3d& p) {
+        min = cwise_min(min, p);
+        max = cwise_max(max, p);
+    }
 };
 
 /// Checks the Mesh invariant that every stage relies on: every triangle index is below

@@ -138,7 +138,8 @@ MeshReport mesh_report(const Mesh& m) {
             std::sort(s.begin(), s.end());
             keys.push_back({s, static_cast<std::uint32_t>(f)});
         }
-        std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) { return a.s < b.s || (a.s == b.s && a.f < b.f); });
+        std::sort(keys.begin(), keys.end(),
+                  [](const Key& a, const Key& b) { return a.s < b.s || (a.s == b.s && a.f < b.f); });
         for (std::size_t k = 1; k < keys.size(); ++k)
             if (keys[k].s == keys[k - 1].s) ++r.duplicate_faces;
     }
@@ -232,7 +233,8 @@ MeshReport mesh_report(const Mesh& m) {
     r.closed = nf > 0 && r.boundary_edges == 0;
     r.manifold = r.non_manifold_edges == 0 && r.non_manifold_vertices == 0;
     r.oriented = r.inconsistent_edges == 0;
-    r.euler_characteristic = static_cast<long>(r.referenced_vertices) - static_cast<long>(r.edges) + static_cast<long>(nf);
+    r.euler_characteristic =
+        static_cast<long>(r.referenced_vertices) - static_cast<long>(r.edges) + static_cast<long>(nf);
 
     auto warn = [&](std::size_t n, const char* what) {
         if (n > 0) r.warnings.push_back(std::to_string(n) + " " + what);
@@ -246,7 +248,8 @@ MeshReport mesh_report(const Mesh& m) {
     warn(r.duplicate_faces, "duplicate faces");
     warn(r.inconsistent_edges, "inconsistently oriented edges");
     if (r.components > 1) r.warnings.push_back(std::to_string(r.components) + " connected components");
-    if (r.closed && r.oriented && r.volume < 0) r.warnings.push_back("closed mesh is oriented inward (negative volume)");
+    if (r.closed && r.oriented && r.volume < 0)
+        r.warnings.push_back("closed mesh is oriented inward (negative volume)");
     return r;
 }
 

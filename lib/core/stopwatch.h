@@ -11,9 +11,7 @@ class Stopwatch {
 public:
     Stopwatch() : t0_(std::chrono::steady_clock::now()) {}
     /// Seconds since construction or the last lap().
-    double seconds() const {
-        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-    }
+    double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
     /// Seconds since construction or the last lap(), and restart.
     double lap() {
         const auto t = std::chrono::steady_clock::now();

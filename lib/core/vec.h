@@ -25,24 +25,47 @@ struct Vec3 {
     constexpr Vec3 operator-() const { return {-x, -y, -z}; }
     constexpr Vec3 operator*(T s) const { return {x * s, y * s, z * s}; }
     constexpr Vec3 operator/(T s) const { return {x / s, y / s, z / s}; }
-    constexpr Vec3& operator+=(const Vec3& o) { x += o.x; y += o.y; z += o.z; return *this; }
-    constexpr Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
-    constexpr Vec3& operator*=(T s) { x *= s; y *= s; z *= s; return *this; }
+    constexpr Vec3& operator+=(const Vec3& o) {
+        x += o.x;
+        y += o.y;
+        z += o.z;
+        return *this;
+    }
+    constexpr Vec3& operator-=(const Vec3& o) {
+        x -= o.x;
+        y -= o.y;
+        z -= o.z;
+        return *this;
+    }
+    constexpr Vec3& operator*=(T s) {
+        x *= s;
+        y *= s;
+        z *= s;
+        return *this;
+    }
     constexpr bool operator==(const Vec3& o) const = default;
 };
 
 template <class T>
-constexpr Vec3<T> operator*(T s, const Vec3<T>& v) { return v * s; }
+constexpr Vec3<T> operator*(T s, const Vec3<T>& v) {
+    return v * s;
+}
 template <class T>
-constexpr T dot(const Vec3<T>& a, const Vec3<T>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+constexpr T dot(const Vec3<T>& a, const Vec3<T>& b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 template <class T>
 constexpr Vec3<T> cross(const Vec3<T>& a, const Vec3<T>& b) {
     return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 template <class T>
-inline T norm(const Vec3<T>& a) { return std::sqrt(dot(a, a)); }
+inline T norm(const Vec3<T>& a) {
+    return std::sqrt(dot(a, a));
+}
 template <class T>
-constexpr T squared_norm(const Vec3<T>& a) { return dot(a, a); }
+constexpr T squared_norm(const Vec3<T>& a) {
+    return dot(a, a);
+}
 template <class T>
 inline Vec3<T> normalized(const Vec3<T>& a) {
     const T n = norm(a);

@@ -46,8 +46,7 @@ void Volume::check(std::string_view who) const {
             std::to_string(block_coords.size()) + " blocks)");
     for (std::size_t b = 0; b < block_coords.size(); ++b) {
         const auto& c = block_coords[b];
-        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= block_dims[0] || c[1] >= block_dims[1] ||
-            c[2] >= block_dims[2])
+        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= block_dims[0] || c[1] >= block_dims[1] || c[2] >= block_dims[2])
             bad("block " + std::to_string(b) + " has coordinates (" + std::to_string(c[0]) + ", " +
                 std::to_string(c[1]) + ", " + std::to_string(c[2]) + ") outside block_dims " + dims_text(block_dims));
         if (block_table[table_index(c[0], c[1], c[2])] != std::int32_t(b))
@@ -57,7 +56,8 @@ void Volume::check(std::string_view who) const {
     std::size_t allocated = 0;
     for (std::size_t t = 0; t < block_table.size(); ++t) {
         const std::int32_t e = block_table[t];
-        if (e >= 0 && std::size_t(e) < block_coords.size()) ++allocated;
+        if (e >= 0 && std::size_t(e) < block_coords.size())
+            ++allocated;
         else if (e != kBlockOutside && e != kBlockInside)
             bad("block_table entry " + std::to_string(t) + " is " + std::to_string(e) + ", expected a block index < " +
                 std::to_string(block_coords.size()) + " or a tile code (" + std::to_string(kBlockOutside) + ", " +
@@ -68,8 +68,8 @@ void Volume::check(std::string_view who) const {
             std::to_string(block_coords.size()) + " are allocated");
     for (std::size_t i = 0; i < values.size(); ++i)
         if (!std::isfinite(values[i]))
-            throw NumericalError(std::string(who) + ": volume sample " + std::to_string(i % kBlockVoxels) + " of block " +
-                                 std::to_string(i / kBlockVoxels) + " is NaN or infinite");
+            throw NumericalError(std::string(who) + ": volume sample " + std::to_string(i % kBlockVoxels) +
+                                 " of block " + std::to_string(i / kBlockVoxels) + " is NaN or infinite");
 }
 
 }  // namespace normalflow

@@ -49,8 +49,8 @@ struct Placement {
 
 /// A regular grid of samples: sample (i, j, k) sits at origin + voxel_size * (i, j, k).
 struct Grid {
-    Vec3d origin;                   ///< world position of sample (0, 0, 0), in the grid's frame
-    double voxel_size = 1.0;        ///< h, world units, > 0
+    Vec3d origin;                      ///< world position of sample (0, 0, 0), in the grid's frame
+    double voxel_size = 1.0;           ///< h, world units, > 0
     std::array<int, 3> dims{0, 0, 0};  ///< number of samples along x, y, z
     /// The grid's frame in the world of its file (identity unless a volume file said otherwise).
     Placement placement;
@@ -62,27 +62,25 @@ struct Grid {
     bool contains(int i, int j, int k) const {
         return i >= 0 && j >= 0 && k >= 0 && i < dims[0] && j < dims[1] && k < dims[2];
     }
-    std::size_t sample_count() const {
-        return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]);
-    }
+    std::size_t sample_count() const { return std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]); }
 };
 
 inline constexpr int kBlockLog2 = 3;
-inline constexpr int kBlockDim = 1 << kBlockLog2;                        // 8
-inline constexpr int kBlockVoxels = kBlockDim * kBlockDim * kBlockDim;   // 512
-inline constexpr std::int32_t kBlockOutside = -1;  ///< unallocated block, value +background
-inline constexpr std::int32_t kBlockInside = -2;   ///< unallocated block, value -background
+inline constexpr int kBlockDim = 1 << kBlockLog2;                       // 8
+inline constexpr int kBlockVoxels = kBlockDim * kBlockDim * kBlockDim;  // 512
+inline constexpr std::int32_t kBlockOutside = -1;                       ///< unallocated block, value +background
+inline constexpr std::int32_t kBlockInside = -2;                        ///< unallocated block, value -background
 
 /// Sparse narrow-band signed distance volume (see file comment).
 /// Invariant: every sample with |phi| < half_width * voxel_size lies in an allocated block.
 struct Volume {
     Grid grid;
-    float background = 3.0f;   ///< world units, > 0: |phi| of every sample outside allocated blocks
-    float half_width = 3.0f;   ///< band half-width in voxels
-    std::array<int, 3> block_dims{0, 0, 0};     ///< ceil(grid.dims / 8)
-    std::vector<std::int32_t> block_table;      ///< per block: index into block_coords, or kBlockOutside/kBlockInside
+    float background = 3.0f;                 ///< world units, > 0: |phi| of every sample outside allocated blocks
+    float half_width = 3.0f;                 ///< band half-width in voxels
+    std::array<int, 3> block_dims{0, 0, 0};  ///< ceil(grid.dims / 8)
+    std::vector<std::int32_t> block_table;   ///< per block: index into block_coords, or kBlockOutside/kBlockInside
     std::vector<std::array<int, 3>> block_coords;  ///< block coordinates (in blocks) of each allocated block
-    std::vector<float> values;                  ///< block_coords.size() * 512 samples
+    std::vector<float> values;                     ///< block_coords.size() * 512 samples
 
     Volume() = default;
     /// An empty volume (every block outside) over grid g; half_width in voxels.
@@ -102,9 +100,7 @@ struct Volume {
     std::size_t table_index(int bi, int bj, int bk) const {
         return (std::size_t(bk) * block_dims[1] + std::size_t(bj)) * block_dims[0] + std::size_t(bi);
     }
-    static constexpr int local_index(int li, int lj, int lk) {
-        return (lk * kBlockDim + lj) * kBlockDim + li;
-    }
+    static constexpr int local_index(int li, int lj, int lk) { return (lk * kBlockDim + lj) * kBlockDim + li; }
     /// Block slot of sample (i, j, k) (which must be inside the grid): >= 0 or kBlockOutside/Inside.
     std::int32_t block_of(int i, int j, int k) const {
         return block_table[table_index(i >> kBlockLog2, j >> kBlockLog2, k >> kBlockLog2)];

@@ -286,7 +286,8 @@ private:
         Vec3d opt;
         // Keep the optimum near the edge: far from it, the quadric's planes no longer describe the
         // surface (nearly parallel planes of a thin part put it far away).
-        const bool solved = opt_.tangent_planes ? q.truncated_minimiser_near(mid, kTruncation, opt) : q.minimiser_near(mid, opt);
+        const bool solved =
+            opt_.tangent_planes ? q.truncated_minimiser_near(mid, kTruncation, opt) : q.minimiser_near(mid, opt);
         const bool near = solved && squared_norm(opt - mid) <= squared_norm(pos_[a] - pos_[b]);
         const Vec3d cand[4] = {pos_[a], pos_[b], mid, opt};
         double best = q(cand[0]);

@@ -171,7 +171,8 @@ Mesh extract_surface(const Volume& v, const ExtractOptions& opt, ExtractReport* 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 16), [&](const auto& range) {
         for (std::size_t s = range.begin(); s != range.end(); ++s)
             for (std::size_t t = 0; t < outs[s].tris.size(); ++t)
-                for (int c = 0; c < 3; ++c) keys[3 * (offset[s] + t) + std::size_t(c)] = outs[s].tris[t][std::size_t(c)];
+                for (int c = 0; c < 3; ++c)
+                    keys[3 * (offset[s] + t) + std::size_t(c)] = outs[s].tris[t][std::size_t(c)];
     });
     std::vector<Key> unique_keys = keys;
     tbb::parallel_sort(unique_keys.begin(), unique_keys.end());
@@ -200,8 +201,8 @@ Mesh extract_surface(const Volume& v, const ExtractOptions& opt, ExtractReport* 
         for (std::size_t t = range.begin(); t != range.end(); ++t)
             for (int c = 0; c < 3; ++c) {
                 const Key key = keys[3 * t + std::size_t(c)];
-                mesh.triangles[t][std::size_t(c)] = std::uint32_t(
-                    std::lower_bound(unique_keys.begin(), unique_keys.end(), key) - unique_keys.begin());
+                mesh.triangles[t][std::size_t(c)] =
+                    std::uint32_t(std::lower_bound(unique_keys.begin(), unique_keys.end(), key) - unique_keys.begin());
             }
     });
     if (report) {

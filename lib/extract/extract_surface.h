@@ -16,10 +16,10 @@ struct ExtractOptions {
 
 /// What extract_surface produced.
 struct ExtractReport {
-    std::size_t vertices = 0;   ///< welded vertices
+    std::size_t vertices = 0;  ///< welded vertices
     std::size_t triangles = 0;
-    bool closed = true;         ///< no boundary edges (true by construction, see extract_surface)
-    bool manifold = true;       ///< every edge in two triangles, every vertex a disk (by construction)
+    bool closed = true;    ///< no boundary edges (true by construction, see extract_surface)
+    bool manifold = true;  ///< every edge in two triangles, every vertex a disk (by construction)
 };
 
 /// The iso-surface {phi = iso} of v as a welded triangle mesh in world coordinates, oriented

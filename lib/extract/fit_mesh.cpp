@@ -82,7 +82,8 @@ bool has_open_boundary(const Mesh& m) {
 
 FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o, const NormalMap* targets) {
     if (o.projection_steps < 0 || o.relax_steps < 0 || o.vertex_steps < 0 || o.boundary_rings < 0)
-        throw InvalidInput("fit_mesh_to_volume: projection_steps, relax_steps, vertex_steps and boundary_rings must be >= 0");
+        throw InvalidInput(
+            "fit_mesh_to_volume: projection_steps, relax_steps, vertex_steps and boundary_rings must be >= 0");
     check_mesh(m, "fit_mesh_to_volume");
     v.check("fit_mesh_to_volume");
     FitReport rep;
@@ -177,23 +178,24 @@ FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o, cons
     if (o.relax_steps > 0) {
         std::vector<Vec3d> next(n);
         for (int s = 0; s < o.relax_steps; ++s) {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                    next[i] = x[i];
-                    if (outside[i] || weight[i] == 0.0 || start[i] == start[i + 1]) continue;
-                    Vec3d mean(0, 0, 0);
-                    for (std::uint32_t k = start[i]; k < start[i + 1]; ++k) mean = mean + x[nb[k]];
-                    Vec3d d = mean / double(start[i + 1] - start[i]) - x[i];
-                    Vec3d g;
-                    S.phi(x[i], &g);
-                    const double len = norm(g);
-                    if (!(len > 1e-12)) continue;
-                    const Vec3d nrm = g / len;
-                    d = d - nrm * dot(nrm, d);
-                    const Vec3d p = project(x[i] + d * 0.5, 2);
-                    next[i] = x[i] + (p - x[i]) * weight[i];
-                }
-            });
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                                      next[i] = x[i];
+                                      if (outside[i] || weight[i] == 0.0 || start[i] == start[i + 1]) continue;
+                                      Vec3d mean(0, 0, 0);
+                                      for (std::uint32_t k = start[i]; k < start[i + 1]; ++k) mean = mean + x[nb[k]];
+                                      Vec3d d = mean / double(start[i + 1] - start[i]) - x[i];
+                                      Vec3d g;
+                                      S.phi(x[i], &g);
+                                      const double len = norm(g);
+                                      if (!(len > 1e-12)) continue;
+                                      const Vec3d nrm = g / len;
+                                      d = d - nrm * dot(nrm, d);
+                                      const Vec3d p = project(x[i] + d * 0.5, 2);
+                                      next[i] = x[i] + (p - x[i]) * weight[i];
+                                  }
+                              });
             x.swap(next);
         }
     }
@@ -235,20 +237,21 @@ FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o, cons
         }
         std::vector<Vec3d> next(n);
         for (int s = 0; s < o.vertex_steps; ++s) {
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-                for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                    next[i] = x[i];
-                    if (outside[i] || start[i] == start[i + 1] || weight[i] == 0.0) continue;
-                    Vec3d sum(0, 0, 0);
-                    for (std::uint32_t k = start[i]; k < start[i + 1]; ++k) {
-                        const Tri& t = m.triangles[faces[k]];
-                        const Vec3d c = (x[group[t[0]]] + x[group[t[1]]] + x[group[t[2]]]) / 3.0;
-                        const Vec3d& nf_ = normal[faces[k]];
-                        sum = sum + nf_ * dot(nf_, c - x[i]);
-                    }
-                    next[i] = x[i] + sum * (weight[i] / double(start[i + 1] - start[i]));
-                }
-            });
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                                      next[i] = x[i];
+                                      if (outside[i] || start[i] == start[i + 1] || weight[i] == 0.0) continue;
+                                      Vec3d sum(0, 0, 0);
+                                      for (std::uint32_t k = start[i]; k < start[i + 1]; ++k) {
+                                          const Tri& t = m.triangles[faces[k]];
+                                          const Vec3d c = (x[group[t[0]]] + x[group[t[1]]] + x[group[t[2]]]) / 3.0;
+                                          const Vec3d& nf_ = normal[faces[k]];
+                                          sum = sum + nf_ * dot(nf_, c - x[i]);
+                                      }
+                                      next[i] = x[i] + sum * (weight[i] / double(start[i + 1] - start[i]));
+                                  }
+                              });
             x.swap(next);
         }
     }

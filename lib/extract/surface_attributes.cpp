@@ -54,31 +54,30 @@ void transfer_colors(Mesh& m, const Mesh& source, const ClosestTriangleQuery& q)
     check_mesh(source, "transfer_colors");
     if (!source.has_colors()) return;
     m.colors.assign(m.positions.size(), Rgba8{255, 255, 255, 255});
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m.positions.size(), 256),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                              const ClosestHit h = q.closest(Vec3d(m.positions[i]));
-                              if (!h.found()) continue;
-                              const Tri& t = source.triangles[h.triangle];
-                              // barycentric coordinates of the closest point, clamped (the first corner's
-                              // colour for a zero-area face)
-                              double w[3] = {1, 0, 0};
-                              if (barycentric_coordinates(h.point, Vec3d(source.positions[t[0]]),
-                                                          Vec3d(source.positions[t[1]]),
-                                                          Vec3d(source.positions[t[2]]), w)) {
-                                  double total = 0;
-                                  for (double& x : w) total += (x = std::max(x, 0.0));
-                                  for (double& x : w) x = total > 0 ? x / total : 1.0 / 3;
-                              }
-                              Rgba8 out{};
-                              for (std::size_t k = 0; k < 4; ++k) {
-                                  double x = 0;
-                                  for (std::size_t c3 = 0; c3 < 3; ++c3) x += w[c3] * source.colors[t[c3]][k];
-                                  out[k] = std::uint8_t(std::lround(std::clamp(x, 0.0, 255.0)));
-                              }
-                              m.colors[i] = out;
-                          }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, m.positions.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const ClosestHit h = q.closest(Vec3d(m.positions[i]));
+                if (!h.found()) continue;
+                const Tri& t = source.triangles[h.triangle];
+                // barycentric coordinates of the closest point, clamped (the first corner's
+                // colour for a zero-area face)
+                double w[3] = {1, 0, 0};
+                if (barycentric_coordinates(h.point, Vec3d(source.positions[t[0]]), Vec3d(source.positions[t[1]]),
+                                            Vec3d(source.positions[t[2]]), w)) {
+                    double total = 0;
+                    for (double& x : w) total += (x = std::max(x, 0.0));
+                    for (double& x : w) x = total > 0 ? x / total : 1.0 / 3;
+                }
+                Rgba8 out{};
+                for (std::size_t k = 0; k < 4; ++k) {
+                    double x = 0;
+                    for (std::size_t c3 = 0; c3 < 3; ++c3) x += w[c3] * source.colors[t[c3]][k];
+                    out[k] = std::uint8_t(std::lround(std::clamp(x, 0.0, 255.0)));
+                }
+                m.colors[i] = out;
+            }
+        });
 }
 
 }  // namespace normalflow

@@ -151,9 +151,9 @@ TrimReport trim_to_footprint(Mesh& m, const Mesh& input, const ClosestTriangleQu
         for (const std::uint32_t l : patch_loops[p]) largest.emplace_back(l, p);
     }
     std::sort(largest.begin(), largest.end(), [&](const auto& a, const auto& b) {
-        return a.first < b.first || (a.first == b.first && (patches[a.second].second > patches[b.second].second ||
-                                                            (patches[a.second].second == patches[b.second].second &&
-                                                             a.second < b.second)));
+        return a.first < b.first ||
+               (a.first == b.first && (patches[a.second].second > patches[b.second].second ||
+                                       (patches[a.second].second == patches[b.second].second && a.second < b.second)));
     });
     std::vector<char> opening(patches.size(), 0);
     for (std::size_t i = 0; i < largest.size(); ++i)
@@ -176,7 +176,8 @@ TrimReport trim_to_footprint(Mesh& m, const Mesh& input, const ClosestTriangleQu
         std::size_t peeled = 0;
         for (std::size_t i = 0; i < alive.size(); ++i) {
             int on = 0;
-            for (int k = 0; k < 3; ++k) on += contains(open, edge_key(alive[i][std::size_t(k)], alive[i][std::size_t((k + 1) % 3)]));
+            for (int k = 0; k < 3; ++k)
+                on += contains(open, edge_key(alive[i][std::size_t(k)], alive[i][std::size_t((k + 1) % 3)]));
             if (on >= 2) {
                 keep[index[i]] = 0;
                 ++peeled;

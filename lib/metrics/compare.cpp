@@ -92,9 +92,11 @@ double relative_change(double cand, double ref) { return ref != 0 ? (cand - ref)
 CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& reference, const CreaseOptions& opt) {
     const char* who = "crease_preservation";
     if (!(opt.angle_deg > 0 && opt.angle_deg < 180))
-        throw InvalidInput(std::string(who) + ": angle " + std::to_string(opt.angle_deg) + " out of range, expected (0, 180)");
+        throw InvalidInput(std::string(who) + ": angle " + std::to_string(opt.angle_deg) +
+                           " out of range, expected (0, 180)");
     if (!(opt.radius_relative > 0) || !std::isfinite(opt.radius_relative))
-        throw InvalidInput(std::string(who) + ": radius_relative " + std::to_string(opt.radius_relative) + ", expected > 0");
+        throw InvalidInput(std::string(who) + ": radius_relative " + std::to_string(opt.radius_relative) +
+                           ", expected > 0");
     const Mesh ref = welded_or_throw(reference, who, "reference");
     const Mesh cand = welded_or_throw(candidate, who, "candidate");
 
@@ -105,7 +107,9 @@ CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& refere
     const double cos_t = std::cos(opt.angle_deg / kDeg);
 
     // 1. Feature edges: (min, max, face) triples sorted; edges with exactly two faces.
-    struct Half { std::uint32_t a, b, f; };
+    struct Half {
+        std::uint32_t a, b, f;
+    };
     std::vector<Half> halves;
     halves.reserve(3 * ref.triangles.size());
     std::vector<Vec3d> fn(ref.triangles.size());
@@ -114,7 +118,8 @@ CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& refere
         const Vec3d n = face_area_vector(ref, t);
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(squared_norm(n) > 0)) continue;
         fn[f] = normalized(n);
-        for (int k = 0; k < 3; ++k) halves.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]), f});
+        for (int k = 0; k < 3; ++k)
+            halves.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]), f});
     }
     std::sort(halves.begin(), halves.end(), [](const Half& x, const Half& y) {
         return x.a != y.a ? x.a < y.a : (x.b != y.b ? x.b < y.b : x.f < y.f);
@@ -130,7 +135,8 @@ CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& refere
                 const double len = norm(b - a);
                 const auto pieces = std::max<std::size_t>(1, std::size_t(std::ceil(len / c.radius)));
                 for (std::size_t k = 0; k < pieces; ++k)
-                    samples.push_back({a + (b - a) * ((double(k) + 0.5) / double(pieces)), n1, n2, len / double(pieces)});
+                    samples.push_back(
+                        {a + (b - a) * ((double(k) + 0.5) / double(pieces)), n1, n2, len / double(pieces)});
                 ++c.feature_edges;
                 c.feature_length += len;
             }
@@ -142,7 +148,8 @@ CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& refere
 
     // 2-4. Candidate sides around each sample.
     std::vector<Vec3d> cn(cand.triangles.size());
-    for (std::size_t f = 0; f < cand.triangles.size(); ++f) cn[f] = face_area_vector(cand, cand.triangles[f]);  // 2·area·n
+    for (std::size_t f = 0; f < cand.triangles.size(); ++f)
+        cn[f] = face_area_vector(cand, cand.triangles[f]);  // 2·area·n
     const TriangleGrid grid(cand, c.radius);
     std::vector<double> angle(samples.size(), 0.0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size(), 64), [&](const auto& range) {
@@ -156,8 +163,13 @@ CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& refere
                 const Vec3d n = normalized(cn[f]);
                 const double d1 = dot(n, q.n1), d2 = dot(n, q.n2);
                 if (d1 <= 0 && d2 <= 0) continue;
-                if (d1 >= d2) { side1 += cn[f]; has1 = true; }
-                else { side2 += cn[f]; has2 = true; }
+                if (d1 >= d2) {
+                    side1 += cn[f];
+                    has1 = true;
+                } else {
+                    side2 += cn[f];
+                    has2 = true;
+                }
             }
             if (has1 && has2 && squared_norm(side1) > 0 && squared_norm(side2) > 0) {
                 const double d = std::clamp(dot(normalized(side1), normalized(side2)), -1.0, 1.0);

@@ -47,14 +47,14 @@ struct CreaseOptions {
 ///     one (fillet radius well above r) gives nearly parallel means; zero-mean noise averages out.
 ///  fraction = preserved length / feature length (1 when the reference has no feature edges).
 struct CreasePreservation {
-    double angle_deg = 30.0;            ///< threshold used
-    double radius = 0.0;                ///< r, world units
-    std::size_t feature_edges = 0;      ///< reference edges above the threshold
-    std::size_t samples = 0;            ///< samples along them
-    double feature_length = 0.0;        ///< total length of the reference's feature edges, world units
-    double preserved_length = 0.0;      ///< length of the preserved samples, world units
-    double fraction = 1.0;              ///< preserved_length / feature_length, in [0, 1]
-    double mean_angle_deg = 0.0;        ///< length-weighted mean candidate side-to-side angle at the samples
+    double angle_deg = 30.0;        ///< threshold used
+    double radius = 0.0;            ///< r, world units
+    std::size_t feature_edges = 0;  ///< reference edges above the threshold
+    std::size_t samples = 0;        ///< samples along them
+    double feature_length = 0.0;    ///< total length of the reference's feature edges, world units
+    double preserved_length = 0.0;  ///< length of the preserved samples, world units
+    double fraction = 1.0;          ///< preserved_length / feature_length, in [0, 1]
+    double mean_angle_deg = 0.0;    ///< length-weighted mean candidate side-to-side angle at the samples
 };
 
 /// Crease preservation of candidate with respect to reference (see CreasePreservation for the protocol).
@@ -68,14 +68,14 @@ CreasePreservation crease_preservation(const Mesh& candidate, const Mesh& refere
 /// Errors of a candidate against a reference with the same vertices and triangles in the same order
 /// (see correspondence_errors).
 struct CorrespondenceErrors {
-    std::size_t faces = 0;               ///< triangles compared (non-degenerate in both meshes)
-    std::size_t degenerate_faces = 0;    ///< triangles skipped: zero area (or a repeated index) in either mesh
-    double mean_face_angle_deg = 0.0;    ///< unweighted mean over the compared faces, degrees; 0 if none
-    double max_face_angle_deg = 0.0;     ///< largest face angle, degrees
-    std::size_t vertices = 0;            ///< vertices compared: every position, referenced or not
-    double mean_vertex_distance = 0.0;   ///< mean over vertices of |p_i − q_i|, world units
-    double max_vertex_distance = 0.0;    ///< largest |p_i − q_i|, world units
-    double reference_diagonal = 0.0;     ///< bounding-box diagonal of the reference, world units
+    std::size_t faces = 0;                       ///< triangles compared (non-degenerate in both meshes)
+    std::size_t degenerate_faces = 0;            ///< triangles skipped: zero area (or a repeated index) in either mesh
+    double mean_face_angle_deg = 0.0;            ///< unweighted mean over the compared faces, degrees; 0 if none
+    double max_face_angle_deg = 0.0;             ///< largest face angle, degrees
+    std::size_t vertices = 0;                    ///< vertices compared: every position, referenced or not
+    double mean_vertex_distance = 0.0;           ///< mean over vertices of |p_i − q_i|, world units
+    double max_vertex_distance = 0.0;            ///< largest |p_i − q_i|, world units
+    double reference_diagonal = 0.0;             ///< bounding-box diagonal of the reference, world units
     double mean_vertex_distance_relative = 0.0;  ///< mean_vertex_distance / reference_diagonal (0 if the diagonal is)
     double max_vertex_distance_relative = 0.0;   ///< max_vertex_distance / reference_diagonal
 };
@@ -111,11 +111,11 @@ struct CompareOptions {
 
 /// Everything compare_meshes measures. Relative changes are (candidate − reference) / |reference|.
 struct MeshComparison {
-    SurfaceDistance distance;            ///< candidate (a) vs reference (b), world units
-    double reference_diagonal = 0.0;     ///< bounding-box diagonal of the reference, world units
-    double hausdorff_relative = 0.0;     ///< distance.hausdorff / reference_diagonal
-    double mean_relative = 0.0;          ///< distance.mean / reference_diagonal
-    double rms_relative = 0.0;           ///< distance.rms / reference_diagonal
+    SurfaceDistance distance;         ///< candidate (a) vs reference (b), world units
+    double reference_diagonal = 0.0;  ///< bounding-box diagonal of the reference, world units
+    double hausdorff_relative = 0.0;  ///< distance.hausdorff / reference_diagonal
+    double mean_relative = 0.0;       ///< distance.mean / reference_diagonal
+    double rms_relative = 0.0;        ///< distance.rms / reference_diagonal
 
     double area_reference = 0.0, area_candidate = 0.0;      ///< squared world units
     double area_change = 0.0;                               ///< relative, e.g. −0.02 = 2 % smaller
@@ -127,9 +127,9 @@ struct MeshComparison {
     bool closed_reference = false, closed_candidate = false;      ///< no boundary edges
     bool manifold_reference = false, manifold_candidate = false;  ///< no non-manifold edges or vertices
 
-    CreasePreservation crease;           ///< see crease_preservation
+    CreasePreservation crease;                           ///< see crease_preservation
     std::optional<CorrespondenceErrors> correspondence;  ///< with CompareOptions::correspondence
-    std::vector<std::string> warnings;   ///< e.g. "candidate is open: volume change is only indicative"
+    std::vector<std::string> warnings;                   ///< e.g. "candidate is open: volume change is only indicative"
 };
 
 /// Compares candidate with reference: surface distances (metrics/surface_distance.h, absolute and

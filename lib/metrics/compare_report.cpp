@@ -56,8 +56,7 @@ std::string report_csv(const std::vector<Row>& rows, bool correspondence) {
         const MeshComparison& c = r.comparison;
         s += csv_quote(r.name);
         for (double v : {c.distance.hausdorff, c.hausdorff_relative, c.distance.mean, c.mean_relative, c.distance.rms,
-                         c.rms_relative, c.distance.mean_normal_angle_deg, c.area_change, c.volume_change})
-        {
+                         c.rms_relative, c.distance.mean_normal_angle_deg, c.area_change, c.volume_change}) {
             s += ',';
             s += fmt("%.9g", v);
         }
@@ -126,7 +125,8 @@ std::string report_markdown(const CompareReport& a) {
          "), exact closest points; Hausdorff is two-sided; mean and RMS pool both directions; the normal "
          "angle is between the candidate's face normal at a sample and the reference's at its closest point. "
          "Area and volume changes are relative to the reference. Crease kept: fraction of the reference's "
-         "feature-edge length (dihedral angle above " + fmt("%.3g", a.options.crease.angle_deg) +
+         "feature-edge length (dihedral angle above " +
+         fmt("%.3g", a.options.crease.angle_deg) +
          "°) where the candidate's area-weighted mean normals on the two sides, within " +
          fmt("%.3g", 100 * a.options.crease.radius_relative) +
          " % of the reference diagonal, still differ by more than that angle.";
@@ -163,18 +163,21 @@ std::string html_escape(const std::string& s) {
 /// <img> that decoded (data-loaded="yes") and counts them in #image-status (used by the browser test).
 std::string report_html(const CompareReport& a, const CompareReportPictures& pic) {
     const std::vector<Row>& rows = a.rows;
-    assert(pic.meshes.size() == rows.size() + 1 && "to_html: pictures.meshes needs the reference and one entry per row");
+    assert(pic.meshes.size() == rows.size() + 1 &&
+           "to_html: pictures.meshes needs the reference and one entry per row");
     std::string s =
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>normalflow compare</title>\n"
         "<style>\nbody{font-family:sans-serif;margin:1em;color:#222;background:#fff}\n"
         "table{border-collapse:collapse;margin-bottom:1em}\ntd,th{border:1px solid #bbb;padding:3px 6px;"
         "text-align:right;font-size:90%}\ntd:first-child,th:first-child{text-align:left}\n"
         "th{background:#eee}\n.grid td{border:none;padding:2px;vertical-align:middle}\n"
-        ".grid img{display:block;width:" + std::to_string(pic.size) + "px;height:" +
-        std::to_string(pic.size) + "px;border:1px solid #ddd}\n"
+        ".grid img{display:block;width:" +
+        std::to_string(pic.size) + "px;height:" + std::to_string(pic.size) +
+        "px;border:1px solid #ddd}\n"
         ".grid th{text-align:center}\n.grid td.name{min-width:9em;max-width:14em;word-break:break-all;text-align:left;"
         "font-size:90%}\n</style>\n</head>\n<body>\n"
-        "<h1>normalflow compare</h1>\n<p>Reference: <code>" + html_escape(a.reference) + "</code></p>\n";
+        "<h1>normalflow compare</h1>\n<p>Reference: <code>" +
+        html_escape(a.reference) + "</code></p>\n";
     s += "<table id=\"metrics\">\n<tr><th>candidate</th><th>Hausdorff</th><th>Hausdorff / diag</th><th>mean</th>"
          "<th>RMS</th><th>normal angle &deg;</th><th>area &Delta;</th><th>volume &Delta;</th><th>components</th>"
          "<th>closed</th><th>manifold</th><th>self-int. pairs</th><th>crease kept</th>";
@@ -212,8 +215,7 @@ std::string report_html(const CompareReport& a, const CompareReportPictures& pic
             const auto& files = distance ? pic.meshes[i].distance : pic.meshes[i].shaded;
             for (std::size_t v = 0; v < files.size(); ++v)
                 g += "<td><img src=\"" + html_escape(files[v]) + "\" alt=\"" + html_escape(name) + ", " + pic.views[v] +
-                     "\" width=\"" + std::to_string(pic.size) + "\" height=\"" +
-                     std::to_string(pic.size) + "\"></td>";
+                     "\" width=\"" + std::to_string(pic.size) + "\" height=\"" + std::to_string(pic.size) + "\"></td>";
             g += "</tr>\n";
         }
         return g + "</table>\n";
@@ -221,11 +223,12 @@ std::string report_html(const CompareReport& a, const CompareReportPictures& pic
     s += grid("Shaded", "shaded", false);
     s += grid("Distance to the reference", "distance", true);
     s += "<p>Colour: unsigned distance from each vertex to the reference surface (exact closest point), "
-         "world units, viridis from 0 to " + fmt("%.4g", pic.distance_max) +
+         "world units, viridis from 0 to " +
+         fmt("%.4g", pic.distance_max) +
          " (the largest vertex distance over all candidates); the reference row is 0 everywhere. "
          "Cameras: orthographic, fitted to the reference's bounding box, the same for every mesh.</p>\n"
-         "<p><img class=\"legend\" src=\"" + html_escape(pic.legend) + "\" alt=\"colour legend, 0 to " +
-         fmt("%.4g", pic.distance_max) + "\"></p>\n";
+         "<p><img class=\"legend\" src=\"" +
+         html_escape(pic.legend) + "\" alt=\"colour legend, 0 to " + fmt("%.4g", pic.distance_max) + "\"></p>\n";
     s += "<script>\nwindow.addEventListener('load', function () {\n"
          "  var imgs = document.images, ok = 0;\n"
          "  for (var i = 0; i < imgs.length; ++i) {\n"

@@ -21,9 +21,9 @@ struct CompareReportRow {
 
 /// A whole comparison: one reference, any number of candidates, the protocol used.
 struct CompareReport {
-    std::string reference;              ///< the reference as the user named it (a path)
-    CompareOptions options;             ///< the protocol (samples, seed, crease angle and radius)
-    std::vector<CompareReportRow> rows; ///< one per candidate, in the user's order
+    std::string reference;               ///< the reference as the user named it (a path)
+    CompareOptions options;              ///< the protocol (samples, seed, crease angle and radius)
+    std::vector<CompareReportRow> rows;  ///< one per candidate, in the user's order
 };
 
 /// Where the pictures of a report are, for the HTML page; paths relative to the page's folder.

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "core/errors.h"
-#include "extract/surface_attributes.h"
 #include "core/mesh_report.h"
+#include "extract/surface_attributes.h"
 
 namespace normalflow {
 

@@ -16,8 +16,8 @@ namespace normalflow {
 
 /// Distribution of the displacement.
 enum class NoiseKind {
-    Gaussian,   ///< every vertex moves by a length drawn from N(0, σ²)
-    Impulsive   ///< a random subset (NoiseOptions::impulsive_fraction) of the vertices moves by N(0, σ²)
+    Gaussian,  ///< every vertex moves by a length drawn from N(0, σ²)
+    Impulsive  ///< a random subset (NoiseOptions::impulsive_fraction) of the vertices moves by N(0, σ²)
 };
 
 /// Direction of the displacement.
@@ -28,9 +28,9 @@ enum class NoiseDirection {
 
 /// Options of add_noise.
 struct NoiseOptions {
-    double sigma = 0.2;           ///< standard deviation of the displacement length, as a multiple of the
-                                  ///< mean edge length (unitless, >= 0; 0.1 to 0.7 is the usual range)
-    std::uint64_t seed = 1;       ///< random seed; the same seed gives the same mesh on every platform
+    double sigma = 0.2;      ///< standard deviation of the displacement length, as a multiple of the
+                             ///< mean edge length (unitless, >= 0; 0.1 to 0.7 is the usual range)
+    std::uint64_t seed = 1;  ///< random seed; the same seed gives the same mesh on every platform
     NoiseKind kind = NoiseKind::Gaussian;
     NoiseDirection direction = NoiseDirection::Normal;
     double impulsive_fraction = 0.1;  ///< fraction of the vertices displaced by Impulsive noise, in [0, 1]
@@ -70,8 +70,8 @@ namespace detail {
 class NormalRng {
 public:
     explicit NormalRng(std::uint64_t seed);
-    double normal();            ///< N(0, 1)
-    double uniform();           ///< [0, 1), 53 random bits
+    double normal();                       ///< N(0, 1)
+    double uniform();                      ///< [0, 1), 53 random bits
     std::uint64_t below(std::uint64_t n);  ///< uniform in [0, n), n > 0 (rejection sampling, unbiased)
 
 private:

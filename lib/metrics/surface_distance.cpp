@@ -46,7 +46,8 @@ Direction sample_direction(const Mesh& from, const Mesh& to, const ClosestTriang
     double total = 0;
     for (std::size_t f = 0; f < from.triangles.size(); ++f) {
         const auto fi = std::uint32_t(f);
-        total += 0.5 * norm(cross(corner(from, fi, 1) - corner(from, fi, 0), corner(from, fi, 2) - corner(from, fi, 0)));
+        total +=
+            0.5 * norm(cross(corner(from, fi, 1) - corner(from, fi, 0), corner(from, fi, 2) - corner(from, fi, 0)));
         cdf[f] = total;
     }
     if (!(total > 0) || !std::isfinite(total))
@@ -64,8 +65,8 @@ Direction sample_direction(const Mesh& from, const Mesh& to, const ClosestTriang
             const auto it = std::upper_bound(cdf.begin(), cdf.end(), u0 * total);
             const auto f = std::uint32_t(std::min<std::size_t>(std::size_t(it - cdf.begin()), cdf.size() - 1));
             const double s1 = std::sqrt(u1);
-            const Vec3d p = corner(from, f, 0) * (1 - s1) + corner(from, f, 1) * (s1 * (1 - u2)) +
-                            corner(from, f, 2) * (s1 * u2);
+            const Vec3d p =
+                corner(from, f, 0) * (1 - s1) + corner(from, f, 1) * (s1 * (1 - u2)) + corner(from, f, 2) * (s1 * u2);
             // Search radius: the previous answer's face bounds the distance (hint only speeds it up).
             const ClosestHit h = q.closest_within(p, std::numeric_limits<double>::infinity(), hint);
             hint = h.triangle;
@@ -130,8 +131,13 @@ std::vector<Vec3d> sample_points(const Mesh& m, int samples_per_face) {
     s.reserve(m.positions.size() + m.triangles.size() * static_cast<std::size_t>(samples_per_face));
     for (const auto& p : m.positions) s.push_back(Vec3d{p[0], p[1], p[2]});
     // Barycentric points: the centroid, then points towards each corner.
-    static constexpr double kBary[][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.6, 0.2, 0.2}, {0.2, 0.6, 0.2},
-                                          {0.2, 0.2, 0.6}, {0.5, 0.5, 0.0}, {0.0, 0.5, 0.5}, {0.5, 0.0, 0.5}};
+    static constexpr double kBary[][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3},
+                                          {0.6, 0.2, 0.2},
+                                          {0.2, 0.6, 0.2},
+                                          {0.2, 0.2, 0.6},
+                                          {0.5, 0.5, 0.0},
+                                          {0.0, 0.5, 0.5},
+                                          {0.5, 0.0, 0.5}};
     const int ns = std::min(samples_per_face, 7);
     for (const auto& t : m.triangles)
         for (int k = 0; k < ns; ++k) {

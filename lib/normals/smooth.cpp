@@ -43,9 +43,7 @@ const char* to_string(SmoothMode mode) {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-    return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// The distances a main iteration reads are exact below this (voxels); above, φ need only be at
 /// least this. The normal loop and the refit read φ at the active samples (|φ| <= active_band)
@@ -84,7 +82,8 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
             refit_to_normals(c);
             if (keep && record.refit_steps > 0) record.volume_shift = restore_volume(band, volume);
             if (normal_map)  // this iteration's N, the last one's in the end (the band moves next)
-                for (std::size_t a = 0; a < 3; ++a) band.write_field(band.work().normals[a], kNoNormal, (*normal_map)[a]);
+                for (std::size_t a = 0; a < 3; ++a)
+                    band.write_field(band.work().normals[a], kNoNormal, (*normal_map)[a]);
             rep.seconds_refit += seconds_since(t1);
         } else {
             const auto t0 = Clock::now();
@@ -105,7 +104,8 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
         const auto t2 = Clock::now();
         if (!(unchanged && band.reinit_limit() >= kHalfWidth)) {
             band.update_band();
-            band.reinitialise(it + 1 < opt.iterations && !unchanged && !smooth_enough ? working_limit(opt) : kHalfWidth, ctl);
+            band.reinitialise(it + 1 < opt.iterations && !unchanged && !smooth_enough ? working_limit(opt) : kHalfWidth,
+                              ctl);
         }
         rep.seconds_reinit += seconds_since(t2);
         record.seconds = seconds_since(t_it);
@@ -124,8 +124,10 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
 
 void validate(const Volume& v, const SmoothOptions& opt) {
     auto bad = [](const std::string& m) { throw InvalidInput("smooth_volume: " + m); };
-    if (opt.iterations < 0) bad("iterations must be >= 0 (0: the mode's default), got " + std::to_string(opt.iterations));
-    if (opt.normal_steps < 0) bad("normal_steps must be >= 0 (0: the mode's default), got " + std::to_string(opt.normal_steps));
+    if (opt.iterations < 0)
+        bad("iterations must be >= 0 (0: the mode's default), got " + std::to_string(opt.iterations));
+    if (opt.normal_steps < 0)
+        bad("normal_steps must be >= 0 (0: the mode's default), got " + std::to_string(opt.normal_steps));
     if (!(opt.length_scale >= 0.0f) || !std::isfinite(opt.length_scale))
         bad("length_scale must be >= 0, got " + std::to_string(opt.length_scale));
     if (!(opt.sigma_spatial > 0.0f) || !std::isfinite(opt.sigma_spatial))
@@ -140,8 +142,10 @@ void validate(const Volume& v, const SmoothOptions& opt) {
         bad("normal_dt must be > 0, got " + std::to_string(opt.normal_dt));
     if (!(opt.refit_dt > 0.0f) || !std::isfinite(opt.refit_dt))
         bad("refit_dt must be > 0, got " + std::to_string(opt.refit_dt));
-    if (opt.refit_max_steps < 0) bad("refit_max_steps must be >= 0 (0: the mode's default), got " + std::to_string(opt.refit_max_steps));
-    if (opt.refit_super_steps < 0) bad("refit_super_steps must be >= 0 (0: explicit steps), got " + std::to_string(opt.refit_super_steps));
+    if (opt.refit_max_steps < 0)
+        bad("refit_max_steps must be >= 0 (0: the mode's default), got " + std::to_string(opt.refit_max_steps));
+    if (opt.refit_super_steps < 0)
+        bad("refit_super_steps must be >= 0 (0: explicit steps), got " + std::to_string(opt.refit_super_steps));
     if (!(opt.refit_tolerance >= 0.0)) bad("refit_tolerance must be >= 0");
     if (opt.conductance_presmooth_steps < 0) bad("conductance_presmooth_steps must be >= 0");
     if (!(opt.mu_robust >= 0.0f) || !std::isfinite(opt.mu_robust))
@@ -167,7 +171,8 @@ int default_iterations(SmoothMode mode) {
 int default_refit_steps(const SmoothOptions& opt) {
     if (!is_neighbourhood_filter(opt.mode)) return 40;
     const float ell = opt.length_scale > 0.0f ? opt.length_scale : kDefaultLengthScale;
-    const double steps = std::ceil(double(kNeighbourhoodRefitTime) * ell * ell / std::min(opt.refit_dt, engine::kMaxDt));
+    const double steps =
+        std::ceil(double(kNeighbourhoodRefitTime) * ell * ell / std::min(opt.refit_dt, engine::kMaxDt));
     return int(std::clamp(steps, 40.0, 100000.0));
 }
 
@@ -180,7 +185,8 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
     validate(v, options);
     SmoothReport rep;
     if (options.normal_dt > engine::kMaxDt)
-        rep.warnings.push_back("normal_dt " + std::to_string(options.normal_dt) + " clamped to the stability bound 1/6");
+        rep.warnings.push_back("normal_dt " + std::to_string(options.normal_dt) +
+                               " clamped to the stability bound 1/6");
     if (options.refit_dt > engine::kMaxDt)
         rep.warnings.push_back("refit_dt " + std::to_string(options.refit_dt) + " clamped to the stability bound 1/6");
     detail::begin(progress, "smooth");

@@ -16,18 +16,18 @@ namespace normalflow {
 
 /// Which surface process smooth_volume runs.
 enum class SmoothMode {
-    Isotropic,      ///< isotropic normal diffusion, G(κ²) = κ² (Tasdizen et al. 2003, Eq. 15)
-    Anisotropic,    ///< Perona–Malik on the normals, g(κ²) = exp(−κ²/(2µ²)) (Eq. 20)
-    HighBoost,      ///< high-boost filter, N' = normalize((1+α)Nⁿ − αNⁿ⁺¹) (Eq. 21–22)
-    MeanCurvature,  ///< mean curvature flow φ_t = |∇φ| H, H = κ1 + κ2 (Eq. 9)
-    Bilateral,      ///< bilateral filter of the normals on the surface, a disc in model units (after
-                    ///< Zheng, Fu, Au & Tai 2011): N_i ← normalize(Σ_j W_s(|p_i − p_j|) W_r(|N_i − N_j|) N_j)
-    Guided,         ///< the bilateral filter with its range weight on a guidance field, the mean
-                    ///< normal of the most consistent patch near each sample (after Zhang, Deng,
-                    ///< Zhang, Bouaziz & Liu 2015): creases stay sharp under heavy noise
-    TotalVariation, ///< total variation of the normal map on the surface with a fidelity term (the
-                    ///< paper's section 6), minimised by a primal–dual solver: piecewise-constant
-                    ///< normals, planar faces meeting at sharp creases (stages/total_variation.h)
+    Isotropic,       ///< isotropic normal diffusion, G(κ²) = κ² (Tasdizen et al. 2003, Eq. 15)
+    Anisotropic,     ///< Perona–Malik on the normals, g(κ²) = exp(−κ²/(2µ²)) (Eq. 20)
+    HighBoost,       ///< high-boost filter, N' = normalize((1+α)Nⁿ − αNⁿ⁺¹) (Eq. 21–22)
+    MeanCurvature,   ///< mean curvature flow φ_t = |∇φ| H, H = κ1 + κ2 (Eq. 9)
+    Bilateral,       ///< bilateral filter of the normals on the surface, a disc in model units (after
+                     ///< Zheng, Fu, Au & Tai 2011): N_i ← normalize(Σ_j W_s(|p_i − p_j|) W_r(|N_i − N_j|) N_j)
+    Guided,          ///< the bilateral filter with its range weight on a guidance field, the mean
+                     ///< normal of the most consistent patch near each sample (after Zhang, Deng,
+                     ///< Zhang, Bouaziz & Liu 2015): creases stay sharp under heavy noise
+    TotalVariation,  ///< total variation of the normal map on the surface with a fidelity term (the
+                     ///< paper's section 6), minimised by a primal–dual solver: piecewise-constant
+                     ///< normals, planar faces meeting at sharp creases (stages/total_variation.h)
 };
 
 /// Whether a mode is one of the filters on the surface samples (Bilateral, Guided, TotalVariation):
@@ -86,11 +86,11 @@ struct SmoothOptions {
                                  ///< to 1/6 (with a warning)
     float refit_dt = 0.1f;       ///< voxel², time step of the refit and of mean curvature flow, > 0;
                                  ///< clamped to 1/6 (explicit second-order flow) with a warning
-    int refit_max_steps = 0;     ///< >= 0: refit steps per main iteration at most; 0: the mode's default,
-                                 ///< default_refit_steps: 40 for the diffusions; for the surface-sample
-                                 ///< filters (is_neighbourhood_filter) a refit time of kNeighbourhoodRefitTime·ℓ² (ℓ =
-                                 ///< length_scale in voxels), at least 40: a surface wave an edge long
-                                 ///< needs a time ∝ ℓ² to follow its filtered normals
+    /// >= 0: refit steps per main iteration at most; 0: the mode's default, default_refit_steps: 40 for the
+    /// diffusions; for the surface-sample filters (is_neighbourhood_filter) a refit time of
+    /// kNeighbourhoodRefitTime·ℓ² (ℓ = length_scale in voxels), at least 40: a surface wave an edge long needs a
+    /// time ∝ ℓ² to follow its filtered normals
+    int refit_max_steps = 0;
     int refit_super_steps = kDefaultRefitSuperSteps;  ///< >= 0, Bilateral, Guided, TotalVariation: the
         ///< refit time refit_max_steps · refit_dt is covered in this many super steps of the
         ///< Runge–Kutta–Legendre method of second order (Meyer, Balsara & Aslam 2014), each twice as
@@ -100,17 +100,17 @@ struct SmoothOptions {
         ///< patient stop decided, once per super step. A super step that runs away (a non-finite
         ///< stage, D doubled) or a first one that already raises D is undone, and the rest of the
         ///< refit time starts again in super steps from there (up to twice), then in explicit steps. 0: the explicit steps of refit_dt (the default before version 0.2).
-    double refit_tolerance = 1e-4;  ///< >= 0: the refit stops when D decreases by less than this
-                                    ///< fraction of itself in one step (0: until D stops decreasing).
-                                    ///< The surface-sample filters: when D has not reached a new low by this
-                                    ///< fraction for max(5, refit_max_steps/20) steps.
+    double refit_tolerance = 1e-4;         ///< >= 0: the refit stops when D decreases by less than this
+                                           ///< fraction of itself in one step (0: until D stops decreasing).
+                                           ///< The surface-sample filters: when D has not reached a new low by this
+                                           ///< fraction for max(5, refit_max_steps/20) steps.
     int conductance_presmooth_steps = 25;  ///< >= 0, Anisotropic only: κ² for the conductance g is
         ///< taken from the normals pre-smoothed by this many isotropic steps of normal_dt (Catté,
         ///< Lions, Morel & Coll 1992: a regularised Perona–Malik; 25 steps of 0.1 ≈ Gaussian σ ≈ 2.2
         ///< voxel; on fandisk_n0.3 at 256: 12 steps 8.41°, 25 steps 8.25°, 50 steps 8.7°). The conductance is then computed once per main iteration and held during its
         ///< normal loop. 0: the paper's g from the current normals at every step (noise whose
         ///< curvature exceeds µ then stops the flow and survives).
-    float mu_robust = 1.0f;      ///< >= 0, Anisotropic with pre-smoothing only: when > 0, the
+    float mu_robust = 1.0f;  ///< >= 0, Anisotropic with pre-smoothing only: when > 0, the
         ///< conductance scale of each main iteration is max(mu, mu_robust · σ_κ), σ_κ a robust noise
         ///< scale of the curvature (after Black, Sapiro, Marimont & Heeger 1998): the lower quartile
         ///< of |κ| at the surface / 0.3186, measured on the pre-smoothed normals and at most the same
@@ -125,18 +125,19 @@ struct SmoothOptions {
         ///< active band by evaluating one more filter pass at each sample's closest point (the
         ///< default before version 0.2; six times the cost) instead of taking that pass's result at
         ///< the surface sample nearest to the closest point
-    bool thin_samples = true;   ///< Bilateral, Guided: filter every s-th shell sample along each axis,
+    bool thin_samples = true;  ///< Bilateral, Guided: filter every s-th shell sample along each axis,
         ///< s = ⌊length_scale / 5⌋ (1 at the automatic resolution), so that a finer grid costs no
         ///< more per main iteration's filter; false: every one (the default before version 0.2)
-    bool preserve_volume = true;  ///< Bilateral, Guided, TotalVariation: after each refit, shift φ by a constant so that
-                                  ///< the enclosed volume is what it was before it (the refit of a
-                                  ///< filtered normal map shrinks convex parts a little, −0.1…−1.4% on
-                                  ///< the study's CAD pairs without this)
+    bool preserve_volume =
+        true;  ///< Bilateral, Guided, TotalVariation: after each refit, shift φ by a constant so that
+               ///< the enclosed volume is what it was before it (the refit of a
+               ///< filtered normal map shrinks convex parts a little, −0.1…−1.4% on
+               ///< the study's CAD pairs without this)
     bool second_order_term = false;  ///< add Appendix A's second term (Eq. 39), ∇·(G N), scaled by
                                      ///< the normal-loop time normal_steps·normal_dt, to the refit
-    float active_band = 4.0f;    ///< voxels, in [1.5, 5]: the normal loop and the refit update the
-                                 ///< samples with |φ| <= this at the start of a main iteration
-    int threads = 0;             ///< worker threads, >= 0 (0: all, 1: serial); results do not depend on it
+    float active_band = 4.0f;        ///< voxels, in [1.5, 5]: the normal loop and the refit update the
+                                     ///< samples with |φ| <= this at the start of a main iteration
+    int threads = 0;                 ///< worker threads, >= 0 (0: all, 1: serial); results do not depend on it
 };
 
 /// The main iterations smooth_volume runs for SmoothOptions::iterations = 0: 16 for Anisotropic,
@@ -185,12 +186,12 @@ struct SmoothIteration {
     float mu = 0;                       ///< Anisotropic: the conductance scale µ used (1/voxel); 0 for
                                         ///< the other modes
     float volume_shift = 0;             ///< voxels: the shift preserve_volume applied (positive: outwards)
-    float roughness = 0;                ///< Bilateral, Guided, TotalVariation: what the filter left, the 75th percentile of
-                                        ///< |N_i − M_i| over the surface samples, M_i the plain Gaussian mean
-                                        ///< of the filtered normals over i's disc (0 for the other modes)
-    std::size_t band_voxels = 0;        ///< samples processed (the active band)
-    std::size_t allocated_voxels = 0;   ///< samples held in allocated blocks
-    double seconds = 0;                 ///< wall seconds of the whole main iteration
+    float roughness = 0;          ///< Bilateral, Guided, TotalVariation: what the filter left, the 75th percentile of
+                                  ///< |N_i − M_i| over the surface samples, M_i the plain Gaussian mean
+                                  ///< of the filtered normals over i's disc (0 for the other modes)
+    std::size_t band_voxels = 0;  ///< samples processed (the active band)
+    std::size_t allocated_voxels = 0;  ///< samples held in allocated blocks
+    double seconds = 0;                ///< wall seconds of the whole main iteration
 
     double normal_energy_start() const { return normal_energy.empty() ? 0.0 : normal_energy.front(); }
     double normal_energy_end() const { return normal_energy.empty() ? 0.0 : normal_energy.back(); }
@@ -200,18 +201,18 @@ struct SmoothIteration {
 /// What smooth_volume did: one record per main iteration run, and the totals.
 struct SmoothReport {
     std::vector<SmoothIteration> iterations;  ///< one per main iteration run, in order
-    bool stopped_unchanged = false;  ///< true when smooth_volume stopped before the requested iterations
-                                     ///< because a refit kept no step: φ was then exactly what that
-                                     ///< iteration started from, and every later iteration would
-                                     ///< have repeated it bit for bit (iterations.size() tells which)
-    double seconds_normals = 0;  ///< total wall seconds in the normal loop (incl. normals, pre-smoothing)
-    double seconds_refit = 0;    ///< total wall seconds in the refit (incl. H_N) or the curvature flow
-    double seconds_reinit = 0;   ///< total wall seconds moving the band and reinitialising φ
+    bool stopped_unchanged = false;           ///< true when smooth_volume stopped before the requested iterations
+                                              ///< because a refit kept no step: φ was then exactly what that
+                                              ///< iteration started from, and every later iteration would
+                                              ///< have repeated it bit for bit (iterations.size() tells which)
+    double seconds_normals = 0;               ///< total wall seconds in the normal loop (incl. normals, pre-smoothing)
+    double seconds_refit = 0;                 ///< total wall seconds in the refit (incl. H_N) or the curvature flow
+    double seconds_reinit = 0;                ///< total wall seconds moving the band and reinitialising φ
     std::vector<std::string> warnings;
 
-    bool stopped_smooth = false;     ///< the surface-sample filters with iterations = 0: stopped before
-                                     ///< kNeighbourhoodIterations because an iteration's filter left a
-                                     ///< roughness below kNeighbourhoodRoughness
+    bool stopped_smooth = false;  ///< the surface-sample filters with iterations = 0: stopped before
+                                  ///< kNeighbourhoodIterations because an iteration's filter left a
+                                  ///< roughness below kNeighbourhoodRoughness
     int iterations_run() const { return int(iterations.size()); }
 };
 

@@ -92,8 +92,8 @@ private:
         const double d2 = squared_norm(q - p);
         const std::uint32_t id = bvh_.order[i];
         // Ties go to the smaller triangle index, so the answer does not depend on the visit order.
-        if (d2 < best.squared_distance || (d2 == best.squared_distance && best.triangle != ClosestHit::kNone &&
-                                           id < best.triangle)) {
+        if (d2 < best.squared_distance ||
+            (d2 == best.squared_distance && best.triangle != ClosestHit::kNone && id < best.triangle)) {
             best = {d2, id, q};
         }
     }

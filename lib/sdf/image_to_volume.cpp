@@ -147,7 +147,8 @@ Volume image_to_volume(const ScalarImage& image, const ImageToVolumeOptions& opt
                     for (int dz = 0; dz < 2; ++dz)
                         for (int dy = 0; dy < 2; ++dy)
                             for (int dx = 0; dx < 2; ++dx) {
-                                const double w = (dx ? t[0] : 1 - t[0]) * (dy ? t[1] : 1 - t[1]) * (dz ? t[2] : 1 - t[2]);
+                                const double w =
+                                    (dx ? t[0] : 1 - t[0]) * (dy ? t[1] : 1 - t[1]) * (dz ? t[2] : 1 - t[2]);
                                 if (w == 0) continue;
                                 const int ii = std::min(i0[0] + dx, image.dims[0] - 1);
                                 const int jj = std::min(i0[1] + dy, image.dims[1] - 1);

@@ -234,7 +234,8 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
     double blocks_total = 1;
     for (int a = 0; a < 3; ++a) {
         const double n = std::ceil(size[a] / h) + 1 + 2.0 * pad;
-        if (n > 1 << 28) throw OutOfMemory("scan_convert: grid would have " + std::to_string(n) + " samples along an axis");
+        if (n > 1 << 28)
+            throw OutOfMemory("scan_convert: grid would have " + std::to_string(n) + " samples along an axis");
         grid.dims[a] = int(n);
         blocks_total *= std::ceil(n / kBlockDim);
     }
@@ -326,9 +327,10 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
     scratch = {};
     rep.seconds_distance = seconds_since(t_dist0);
     if (wn && !any_inside)
-        throw InvalidInput("scan_convert: the mesh encloses no volume (winding number > 1/2 nowhere near it: an "
-                           "open sheet, or oriented inside-out); use --shell T (shell_thickness) to treat it as a "
-                           "thin shell");
+        throw InvalidInput(
+            "scan_convert: the mesh encloses no volume (winding number > 1/2 nowhere near it: an "
+            "open sheet, or oriented inside-out); use --shell T (shell_thickness) to treat it as a "
+            "thin shell");
 
     // 3. Tile signs of unallocated blocks: scan each block row along x, starting outside.
     const auto t_tile0 = Clock::now();

@@ -15,26 +15,27 @@ namespace normalflow {
 
 /// Options for scan_convert.
 struct ScanConvertOptions {
-    int resolution = 256;          ///< voxels along the longest bounding-box side, >= 1; ignored if voxel_size > 0
-    double voxel_size = 0;         ///< h, world units; > 0 overrides resolution, 0 = use resolution
-    float half_width = 3.0f;       ///< band half-width in voxels, >= 1 (the normal-map engine needs about 7)
-    double shell_thickness = 0;    ///< world units, >= 0; > 0 treats the mesh as a thin shell: phi = d − T/2
-    int threads = 0;               ///< worker threads, 0 = all, 1 = serial; the result does not depend on it
+    int resolution = 256;        ///< voxels along the longest bounding-box side, >= 1; ignored if voxel_size > 0
+    double voxel_size = 0;       ///< h, world units; > 0 overrides resolution, 0 = use resolution
+    float half_width = 3.0f;     ///< band half-width in voxels, >= 1 (the normal-map engine needs about 7)
+    double shell_thickness = 0;  ///< world units, >= 0; > 0 treats the mesh as a thin shell: phi = d − T/2
+    int threads = 0;             ///< worker threads, 0 = all, 1 = serial; the result does not depend on it
 };
 
 /// What scan_convert did.
 struct ScanConvertReport {
-    Grid grid;                        ///< the grid of the returned volume
-    std::size_t band_voxels = 0;      ///< samples with |phi| < half_width · h
-    std::size_t blocks = 0;           ///< allocated 8³ blocks
-    std::size_t candidate_blocks = 0; ///< blocks examined (near a triangle's bounding box)
-    std::size_t uncertain_sign = 0;   ///< band samples > 1e-3 h off the surface whose winding number was within 0.1 of 1/2
-    std::size_t winding_evaluations = 0;  ///< winding number queries made
-    std::size_t tile_conflict_blocks = 0; ///< inside tiles next to outside tiles, allocated (see scan_convert)
-    double seconds_distance = 0;      ///< wall time: distances, band and block signs
-    double seconds_sign = 0;          ///< wall time: winding-number tree build and tile signs
-    std::size_t memory_bytes = 0;     ///< bytes held by the returned volume
-    std::vector<std::string> warnings;  ///< oddities handled (uncertain signs, ...)
+    Grid grid;                         ///< the grid of the returned volume
+    std::size_t band_voxels = 0;       ///< samples with |phi| < half_width · h
+    std::size_t blocks = 0;            ///< allocated 8³ blocks
+    std::size_t candidate_blocks = 0;  ///< blocks examined (near a triangle's bounding box)
+    std::size_t uncertain_sign =
+        0;  ///< band samples > 1e-3 h off the surface whose winding number was within 0.1 of 1/2
+    std::size_t winding_evaluations = 0;   ///< winding number queries made
+    std::size_t tile_conflict_blocks = 0;  ///< inside tiles next to outside tiles, allocated (see scan_convert)
+    double seconds_distance = 0;           ///< wall time: distances, band and block signs
+    double seconds_sign = 0;               ///< wall time: winding-number tree build and tile signs
+    std::size_t memory_bytes = 0;          ///< bytes held by the returned volume
+    std::vector<std::string> warnings;     ///< oddities handled (uncertain signs, ...)
 };
 
 /// Signed distance to m, negative inside, in world units, stored in a narrow band of

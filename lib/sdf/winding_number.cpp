@@ -30,13 +30,13 @@ struct WindingNumber::Impl {
     //   w·4π ≈ Σ_a N_a G_a + Σ_ab M_ab ∂_b G_a + ½ Σ_abc T_abc ∂_b ∂_c G_a,
     // N = Σ a_f n_f, M_ab = Σ a_f n_fa (c_f − p̃)_b, T_abc = Σ n_fa ∫_f (x − p̃)_b (x − p̃)_c dA.
     struct Moments {
-        Vec3d center;                   // area-weighted centre p̃
-        Vec3d area;                     // N
-        std::array<double, 9> m{};      // M, row-major
-        double tr = 0;                  // trace of M
-        Vec3d u, v;                     // u_c = Σ_a T_aac, v_a = Σ_b T_abb
-        std::array<double, 10> t3{};    // symmetrised T: coefficients of the cubic form Σ T_abc r_a r_b r_c
-        double radius_sq = 0;           // (beta · r)²
+        Vec3d center;                 // area-weighted centre p̃
+        Vec3d area;                   // N
+        std::array<double, 9> m{};    // M, row-major
+        double tr = 0;                // trace of M
+        Vec3d u, v;                   // u_c = Σ_a T_aac, v_a = Σ_b T_abb
+        std::array<double, 10> t3{};  // symmetrised T: coefficients of the cubic form Σ T_abc r_a r_b r_c
+        double radius_sq = 0;         // (beta · r)²
     };
     detail::TriangleBvh bvh;
     std::vector<Moments> mom;
@@ -119,8 +119,8 @@ WindingNumber::WindingNumber(const Mesh& m, double beta) : impl_(std::make_uniqu
                         mo.m[std::size_t(3 * a + b)] += A[a] * cen[b];
                         // ∫_f y yᵀ dA = (area / 12) (Σ_i y_i y_iᵀ + s sᵀ); times n_a: A_a / 12 (...).
                         for (int cc = b; cc < 3; ++cc)
-                            t[a][b][cc] += A[a] / 12.0 *
-                                           (y0[b] * y0[cc] + y1[b] * y1[cc] + y2[b] * y2[cc] + s[b] * s[cc]);
+                            t[a][b][cc] +=
+                                A[a] / 12.0 * (y0[b] * y0[cc] + y1[b] * y1[cc] + y2[b] * y2[cc] + s[b] * s[cc]);
                     }
             }
             for (int a = 0; a < 3; ++a)
@@ -131,9 +131,10 @@ WindingNumber::WindingNumber(const Mesh& m, double beta) : impl_(std::make_uniqu
                 for (int b = 0; b < 3; ++b) {
                     mo.u[b] += t[a][a][b];
                     mo.v[a] += t[a][b][b];
-                    for (int cc = 0; cc < 3; ++cc) mo.t3[std::size_t(cubic_index(std::min({a, b, cc}),
-                                                                                 a + b + cc - std::min({a, b, cc}) - std::max({a, b, cc}),
-                                                                                 std::max({a, b, cc})))] += t[a][b][cc];
+                    for (int cc = 0; cc < 3; ++cc)
+                        mo.t3[std::size_t(cubic_index(std::min({a, b, cc}),
+                                                      a + b + cc - std::min({a, b, cc}) - std::max({a, b, cc}),
+                                                      std::max({a, b, cc})))] += t[a][b][cc];
                 }
             double r2 = 0;
             for (int corner = 0; corner < 8; ++corner) {
@@ -195,7 +196,8 @@ double WindingNumber::operator()(const Vec3d& p) const {
 double WindingNumber::exact(const Vec3d& p) const {
     const Impl& I = *impl_;
     double s = 0;
-    for (std::size_t i = 0; i < I.corners.size(); i += 3) s += solid_angle(p, I.corners[i], I.corners[i + 1], I.corners[i + 2]);
+    for (std::size_t i = 0; i < I.corners.size(); i += 3)
+        s += solid_angle(p, I.corners[i], I.corners[i + 1], I.corners[i + 2]);
     return s / (4.0 * std::numbers::pi);
 }
 

@@ -47,8 +47,8 @@ using namespace normalflow;
 
 namespace {
 
-static_assert(sizeof(Vec3f) == 3 * sizeof(float) && sizeof(Tri) == 3 * sizeof(std::uint32_t) &&
-              sizeof(Rgba8) == 4 && sizeof(TexCoord) == 2 * sizeof(float));
+static_assert(sizeof(Vec3f) == 3 * sizeof(float) && sizeof(Tri) == 3 * sizeof(std::uint32_t) && sizeof(Rgba8) == 4 &&
+              sizeof(TexCoord) == 2 * sizeof(float));
 
 /// A numpy view (rows × C) of a vector of C-element records, kept alive by owner.
 template <class Scalar, int C, class Record>
@@ -65,7 +65,9 @@ std::vector<Record> records(const py::array_t<Scalar, py::array::c_style | py::a
     if (a.ndim() != 2 || a.shape(1) != C)
         throw InvalidInput(std::string(what) + ": expected an array of shape (n, " + std::to_string(C) + "), got " +
                            std::to_string(a.ndim()) + " dimensions" +
-                           (a.ndim() == 2 ? " of shape (" + std::to_string(a.shape(0)) + ", " + std::to_string(a.shape(1)) + ")" : ""));
+                           (a.ndim() == 2
+                                ? " of shape (" + std::to_string(a.shape(0)) + ", " + std::to_string(a.shape(1)) + ")"
+                                : ""));
     std::vector<Record> out(static_cast<std::size_t>(a.shape(0)));
     if (!out.empty()) std::memcpy(static_cast<void*>(out.data()), a.data(), out.size() * sizeof(Record));
     return out;
@@ -87,8 +89,8 @@ Mesh make_mesh(const py::array_t<float, py::array::c_style | py::array::forcecas
         for (int c = 0; c < 3; ++c) {
             const std::int64_t i = f[3 * t + c];
             if (i < 0 || i >= n)
-                throw InvalidInput("faces: row " + std::to_string(t) + " has index " + std::to_string(i) + ", outside the " +
-                                   std::to_string(n) + " vertices");
+                throw InvalidInput("faces: row " + std::to_string(t) + " has index " + std::to_string(i) +
+                                   ", outside the " + std::to_string(n) + " vertices");
             m.triangles[t][c] = static_cast<std::uint32_t>(i);
         }
     const auto per_vertex = [&](std::size_t size, const char* what) {
@@ -202,7 +204,8 @@ std::unique_ptr<Flags> flags_of(Command c) {
     CLI::App* app = &f->app;
     if (c != Command::Extract) cli::add_grid_options(app, f->pipeline);
     if (c == Command::Voxelize)
-        app->add_option("--band", f->pipeline.scan.half_width, "band half-width in voxels")->check(CLI::Range(1.0, 64.0));
+        app->add_option("--band", f->pipeline.scan.half_width, "band half-width in voxels")
+            ->check(CLI::Range(1.0, 64.0));
     if (c == Command::Smooth) cli::add_smooth_options(app, f->pipeline);
     if (c != Command::Voxelize) cli::add_decimation_options(app, f->pipeline);
     return f;
@@ -228,7 +231,8 @@ py::tuple mesh_and_report(Mesh&& m, const Json& j) { return py::make_tuple(py::c
 }  // namespace
 
 PYBIND11_MODULE(_normalflow, m) {
-    m.doc() = "normalflow: geometric surface processing via normal maps (Tasdizen et al. 2003); see the normalflow package";
+    m.doc() =
+        "normalflow: geometric surface processing via normal maps (Tasdizen et al. 2003); see the normalflow package";
     m.attr("__version__") = version();
 
     static py::exception<InvalidInput> invalid(m, "InvalidInput", PyExc_ValueError);
@@ -257,20 +261,28 @@ PYBIND11_MODULE(_normalflow, m) {
              py::arg("colors") = py::none(), py::arg("texcoords") = py::none(),
              "vertices (n, 3) and faces (m, 3) of indices into them; optional per-vertex normals (n, 3), "
              "RGBA colors (n, 4) uint8 and texcoords (n, 2)")
-        .def_property_readonly("vertices", [](py::object self) { return view<float, 3>(self.cast<Mesh&>().positions, self); },
-                               "(n, 3) float32")
-        .def_property_readonly("faces", [](py::object self) { return view<std::uint32_t, 3>(self.cast<Mesh&>().triangles, self); },
-                               "(m, 3) uint32")
-        .def_property_readonly("normals", [](py::object self) -> py::object {
-            Mesh& mesh = self.cast<Mesh&>();
-            return mesh.normals.empty() ? py::none() : view<float, 3>(mesh.normals, self);
-        }, "(n, 3) float32 unit vertex normals, or None")
-        .def_property_readonly("colors", [](py::object self) { return view<std::uint8_t, 4>(self.cast<Mesh&>().colors, self); },
-                               "(n, 4) uint8 RGBA, or None")
-        .def_property_readonly("texcoords", [](py::object self) { return view<float, 2>(self.cast<Mesh&>().texcoords, self); },
-                               "(n, 2) float32, or None")
-        .def("report", [](const Mesh& mesh) { return to_json(mesh_report(mesh)).dump(); },
-             "JSON: counts, closed, manifold, components (as normalflow info)")
+        .def_property_readonly(
+            "vertices", [](py::object self) { return view<float, 3>(self.cast<Mesh&>().positions, self); },
+            "(n, 3) float32")
+        .def_property_readonly(
+            "faces", [](py::object self) { return view<std::uint32_t, 3>(self.cast<Mesh&>().triangles, self); },
+            "(m, 3) uint32")
+        .def_property_readonly(
+            "normals",
+            [](py::object self) -> py::object {
+                Mesh& mesh = self.cast<Mesh&>();
+                return mesh.normals.empty() ? py::none() : view<float, 3>(mesh.normals, self);
+            },
+            "(n, 3) float32 unit vertex normals, or None")
+        .def_property_readonly(
+            "colors", [](py::object self) { return view<std::uint8_t, 4>(self.cast<Mesh&>().colors, self); },
+            "(n, 4) uint8 RGBA, or None")
+        .def_property_readonly(
+            "texcoords", [](py::object self) { return view<float, 2>(self.cast<Mesh&>().texcoords, self); },
+            "(n, 2) float32, or None")
+        .def(
+            "report", [](const Mesh& mesh) { return to_json(mesh_report(mesh)).dump(); },
+            "JSON: counts, closed, manifold, components (as normalflow info)")
         .def("__repr__", [](const Mesh& mesh) {
             return "<normalflow.Mesh " + std::to_string(mesh.positions.size()) + " vertices, " +
                    std::to_string(mesh.triangles.size()) + " triangles>";
@@ -279,25 +291,32 @@ PYBIND11_MODULE(_normalflow, m) {
     py::class_<PyVolume>(m, "Volume", "A narrow-band signed distance volume, negative inside")
         .def_property_readonly("dims", [](const PyVolume& v) { return v.volume.grid.dims; })
         .def_property_readonly("voxel_size", [](const PyVolume& v) { return v.volume.grid.voxel_size; })
-        .def_property_readonly("origin", [](const PyVolume& v) {
-            const Vec3d& o = v.volume.grid.origin;
-            return std::array<double, 3>{o.x, o.y, o.z};
-        })
+        .def_property_readonly("origin",
+                               [](const PyVolume& v) {
+                                   const Vec3d& o = v.volume.grid.origin;
+                                   return std::array<double, 3>{o.x, o.y, o.z};
+                               })
         .def_property_readonly("half_width", [](const PyVolume& v) { return v.volume.half_width; })
         .def_property_readonly("blocks", [](const PyVolume& v) { return v.volume.block_count(); })
-        .def("to_dense", [](const PyVolume& v) {
-            const Grid& g = v.volume.grid;
-            py::array_t<float> out({g.dims[0], g.dims[1], g.dims[2]});
-            auto a = out.mutable_unchecked<3>();
-            for (int i = 0; i < g.dims[0]; ++i)
-                for (int j = 0; j < g.dims[1]; ++j)
-                    for (int k = 0; k < g.dims[2]; ++k) a(i, j, k) = v.volume.value(i, j, k);
-            return out;
-        }, "The samples as a dense (nx, ny, nz) float32 array indexed [i, j, k], ± the band's width outside it")
-        .def("write", [](const PyVolume& v, const std::filesystem::path& path) {
-            py::gil_scoped_release release;
-            write_volume(path.string(), v.volume);
-        }, py::arg("path"), "Writes .vdb or .nrrd (written whole or not at all)")
+        .def(
+            "to_dense",
+            [](const PyVolume& v) {
+                const Grid& g = v.volume.grid;
+                py::array_t<float> out({g.dims[0], g.dims[1], g.dims[2]});
+                auto a = out.mutable_unchecked<3>();
+                for (int i = 0; i < g.dims[0]; ++i)
+                    for (int j = 0; j < g.dims[1]; ++j)
+                        for (int k = 0; k < g.dims[2]; ++k) a(i, j, k) = v.volume.value(i, j, k);
+                return out;
+            },
+            "The samples as a dense (nx, ny, nz) float32 array indexed [i, j, k], ± the band's width outside it")
+        .def(
+            "write",
+            [](const PyVolume& v, const std::filesystem::path& path) {
+                py::gil_scoped_release release;
+                write_volume(path.string(), v.volume);
+            },
+            py::arg("path"), "Writes .vdb or .nrrd (written whole or not at all)")
         .def("__repr__", [](const PyVolume& v) {
             const Grid& g = v.volume.grid;
             return "<normalflow.Volume " + std::to_string(g.dims[0]) + "x" + std::to_string(g.dims[1]) + "x" +
@@ -305,207 +324,253 @@ PYBIND11_MODULE(_normalflow, m) {
                    std::to_string(v.volume.block_count()) + " blocks>";
         });
 
-    m.def("read_mesh", [](const std::string& path) {
-        py::gil_scoped_release release;
-        return read_mesh(path);
-    }, py::arg("path"));
-    m.def("write_mesh", [](const std::string& path, const Mesh& mesh) {
-        py::gil_scoped_release release;
-        write_mesh(path, mesh);
-    }, py::arg("path"), py::arg("mesh"));
-    m.def("read_volume", [](const std::string& path, std::optional<double> iso, std::optional<double> label, bool negate,
-                            double voxel_size) {
-        VolumeInput in;
-        in.iso = iso;
-        in.label = label;
-        in.negate = negate;
-        in.voxel_size = voxel_size;
-        py::gil_scoped_release release;
-        PyVolume v;
-        v.volume = read_volume(path, in, &v.info);
-        return v;
-    }, py::arg("path"), py::arg("iso") = py::none(), py::arg("label") = py::none(), py::arg("negate") = false,
-       py::arg("voxel_size") = 0.0);
-    m.def("image_to_volume", [](const py::array_t<float, py::array::c_style | py::array::forcecast>& values,
-                                std::array<double, 3> spacing, std::array<double, 3> origin, std::optional<double> iso,
-                                std::optional<double> label, bool negate, double voxel_size) {
-        if (values.ndim() != 3) throw InvalidInput("image: expected a 3-dimensional array indexed [i, j, k]");
-        ScalarImage image;
-        for (int a = 0; a < 3; ++a) image.dims[a] = static_cast<int>(values.shape(a));
-        image.values.resize(image.sample_count());
-        // numpy's [i, j, k] (k fastest) into the image's x-fastest order
-        auto v = values.unchecked<3>();
-        for (int k = 0; k < image.dims[2]; ++k)
-            for (int j = 0; j < image.dims[1]; ++j)
-                for (int i = 0; i < image.dims[0]; ++i)
-                    image.values[std::size_t(i) + std::size_t(image.dims[0]) * (std::size_t(j) + std::size_t(image.dims[1]) * k)] = v(i, j, k);
-        image.origin = Vec3d(origin[0], origin[1], origin[2]);
-        for (int a = 0; a < 3; ++a) {
-            image.axes[a] = Vec3d(0, 0, 0);
-            (a == 0 ? image.axes[a].x : a == 1 ? image.axes[a].y : image.axes[a].z) = spacing[a];
-        }
-        ImageToVolumeOptions o;
-        if (iso && label) throw InvalidInput("image: iso and label are exclusive");
-        if (label) {
-            o.surface.label = label;
-        } else if (iso) {
-            o.surface.iso = *iso;
-        } else {
-            const std::optional<double> mask = binary_mask_label(image);
-            if (!mask) throw InvalidInput("image: not a binary mask; give iso= (a scalar image) or label= (a label map)");
-            o.surface.label = mask;
-        }
-        o.surface.negate = negate;
-        o.voxel_size = voxel_size;
-        py::gil_scoped_release release;
-        PyVolume out{image_to_volume(image, o), {}};
-        out.info.spacing = spacing;
-        return out;
-    }, py::arg("values"), py::arg("spacing"), py::arg("origin"), py::arg("iso") = py::none(), py::arg("label") = py::none(),
-       py::arg("negate") = false, py::arg("voxel_size") = 0.0);
+    m.def(
+        "read_mesh",
+        [](const std::string& path) {
+            py::gil_scoped_release release;
+            return read_mesh(path);
+        },
+        py::arg("path"));
+    m.def(
+        "write_mesh",
+        [](const std::string& path, const Mesh& mesh) {
+            py::gil_scoped_release release;
+            write_mesh(path, mesh);
+        },
+        py::arg("path"), py::arg("mesh"));
+    m.def(
+        "read_volume",
+        [](const std::string& path, std::optional<double> iso, std::optional<double> label, bool negate,
+           double voxel_size) {
+            VolumeInput in;
+            in.iso = iso;
+            in.label = label;
+            in.negate = negate;
+            in.voxel_size = voxel_size;
+            py::gil_scoped_release release;
+            PyVolume v;
+            v.volume = read_volume(path, in, &v.info);
+            return v;
+        },
+        py::arg("path"), py::arg("iso") = py::none(), py::arg("label") = py::none(), py::arg("negate") = false,
+        py::arg("voxel_size") = 0.0);
+    m.def(
+        "image_to_volume",
+        [](const py::array_t<float, py::array::c_style | py::array::forcecast>& values, std::array<double, 3> spacing,
+           std::array<double, 3> origin, std::optional<double> iso, std::optional<double> label, bool negate,
+           double voxel_size) {
+            if (values.ndim() != 3) throw InvalidInput("image: expected a 3-dimensional array indexed [i, j, k]");
+            ScalarImage image;
+            for (int a = 0; a < 3; ++a) image.dims[a] = static_cast<int>(values.shape(a));
+            image.values.resize(image.sample_count());
+            // numpy's [i, j, k] (k fastest) into the image's x-fastest order
+            auto v = values.unchecked<3>();
+            for (int k = 0; k < image.dims[2]; ++k)
+                for (int j = 0; j < image.dims[1]; ++j)
+                    for (int i = 0; i < image.dims[0]; ++i)
+                        image.values[std::size_t(i) +
+                                     std::size_t(image.dims[0]) * (std::size_t(j) + std::size_t(image.dims[1]) * k)] =
+                            v(i, j, k);
+            image.origin = Vec3d(origin[0], origin[1], origin[2]);
+            for (int a = 0; a < 3; ++a) {
+                image.axes[a] = Vec3d(0, 0, 0);
+                (a == 0 ? image.axes[a].x : a == 1 ? image.axes[a].y : image.axes[a].z) = spacing[a];
+            }
+            ImageToVolumeOptions o;
+            if (iso && label) throw InvalidInput("image: iso and label are exclusive");
+            if (label) {
+                o.surface.label = label;
+            } else if (iso) {
+                o.surface.iso = *iso;
+            } else {
+                const std::optional<double> mask = binary_mask_label(image);
+                if (!mask)
+                    throw InvalidInput("image: not a binary mask; give iso= (a scalar image) or label= (a label map)");
+                o.surface.label = mask;
+            }
+            o.surface.negate = negate;
+            o.voxel_size = voxel_size;
+            py::gil_scoped_release release;
+            PyVolume out{image_to_volume(image, o), {}};
+            out.info.spacing = spacing;
+            return out;
+        },
+        py::arg("values"), py::arg("spacing"), py::arg("origin"), py::arg("iso") = py::none(),
+        py::arg("label") = py::none(), py::arg("negate") = false, py::arg("voxel_size") = 0.0);
 
-    m.def("flag_names", [](const std::string& command) { return flag_names(*flags_of(command_of(command))); },
-          "The command-line flags of smooth, voxelize or extract");
+    m.def(
+        "flag_names", [](const std::string& command) { return flag_names(*flags_of(command_of(command))); },
+        "The command-line flags of smooth, voxelize or extract");
     m.def("flag_help", [](const std::string& command) { return flags_of(command_of(command))->app.help(); });
 
-    m.def("smooth", [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
-        const PipelineOptions opt = options_of(Command::Smooth, args);
-        PyProgress progress(std::move(callback));
-        PipelineResult r = released(progress, [&] {
-            validate(opt);
-            return smooth_mesh(mesh, opt, &progress);
-        });
-        Json j = to_json(r.report);
-        j.set("mode", to_string(opt.smooth.mode)).set("parameters", parameters_json(opt, r.report, r.report.scan.grid.voxel_size));
-        j.set("version", version());
-        return mesh_and_report(std::move(r.mesh), j);
-    }, py::arg("mesh"), py::arg("args"), py::arg("progress"));
+    m.def(
+        "smooth",
+        [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
+            const PipelineOptions opt = options_of(Command::Smooth, args);
+            PyProgress progress(std::move(callback));
+            PipelineResult r = released(progress, [&] {
+                validate(opt);
+                return smooth_mesh(mesh, opt, &progress);
+            });
+            Json j = to_json(r.report);
+            j.set("mode", to_string(opt.smooth.mode))
+                .set("parameters", parameters_json(opt, r.report, r.report.scan.grid.voxel_size));
+            j.set("version", version());
+            return mesh_and_report(std::move(r.mesh), j);
+        },
+        py::arg("mesh"), py::arg("args"), py::arg("progress"));
 
-    m.def("smooth_volume", [](const PyVolume& in, const std::vector<std::string>& args, py::object callback, bool want_mesh) {
-        PipelineOptions opt = options_of(Command::Smooth, args);
-        if (opt.scan.resolution != 0)
-            throw InvalidInput("resolution applies to a mesh input; a volume keeps its grid");
-        if (opt.scan.voxel_size != 0)
-            throw InvalidInput("voxel_size applies to a mesh input; give it to read_volume or image_to_volume");
-        if (in.info.spacing[0] > 0) cli::set_volume_length_scale(opt, in.info);  // as the tool: the file's spacing
-        PyProgress progress(std::move(callback));
-        PyVolume out{in.volume, in.info};
-        PipelineResult r = released(progress, [&] { return smooth_volume_input(out.volume, opt, &progress, want_mesh); });
-        Json j = to_json(r.report);
-        j.set("mode", to_string(opt.smooth.mode)).set("parameters", parameters_json(opt, r.report, in.volume.grid.voxel_size));
-        j.set("version", version());
-        if (!want_mesh) return py::make_tuple(py::cast(std::move(out)), j.dump());
-        return mesh_and_report(std::move(r.mesh), j);
-    }, py::arg("volume"), py::arg("args"), py::arg("progress"), py::arg("want_mesh"));
+    m.def(
+        "smooth_volume",
+        [](const PyVolume& in, const std::vector<std::string>& args, py::object callback, bool want_mesh) {
+            PipelineOptions opt = options_of(Command::Smooth, args);
+            if (opt.scan.resolution != 0)
+                throw InvalidInput("resolution applies to a mesh input; a volume keeps its grid");
+            if (opt.scan.voxel_size != 0)
+                throw InvalidInput("voxel_size applies to a mesh input; give it to read_volume or image_to_volume");
+            if (in.info.spacing[0] > 0) cli::set_volume_length_scale(opt, in.info);  // as the tool: the file's spacing
+            PyProgress progress(std::move(callback));
+            PyVolume out{in.volume, in.info};
+            PipelineResult r =
+                released(progress, [&] { return smooth_volume_input(out.volume, opt, &progress, want_mesh); });
+            Json j = to_json(r.report);
+            j.set("mode", to_string(opt.smooth.mode))
+                .set("parameters", parameters_json(opt, r.report, in.volume.grid.voxel_size));
+            j.set("version", version());
+            if (!want_mesh) return py::make_tuple(py::cast(std::move(out)), j.dump());
+            return mesh_and_report(std::move(r.mesh), j);
+        },
+        py::arg("volume"), py::arg("args"), py::arg("progress"), py::arg("want_mesh"));
 
-    m.def("voxelize", [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
-        PipelineOptions opt = options_of(Command::Voxelize, args);
-        opt.smoothing = false;
-        PyProgress progress(std::move(callback));
-        PipelineReport r;
-        PyVolume v{released(progress, [&] { return mesh_to_volume(mesh, opt, &r, &progress); }), {}};
-        Json j = to_json(r);
-        j.set("version", version());
-        return py::make_tuple(py::cast(std::move(v)), j.dump());
-    }, py::arg("mesh"), py::arg("args"), py::arg("progress"));
+    m.def(
+        "voxelize",
+        [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
+            PipelineOptions opt = options_of(Command::Voxelize, args);
+            opt.smoothing = false;
+            PyProgress progress(std::move(callback));
+            PipelineReport r;
+            PyVolume v{released(progress, [&] { return mesh_to_volume(mesh, opt, &r, &progress); }), {}};
+            Json j = to_json(r);
+            j.set("version", version());
+            return py::make_tuple(py::cast(std::move(v)), j.dump());
+        },
+        py::arg("mesh"), py::arg("args"), py::arg("progress"));
 
-    m.def("extract", [](const PyVolume& v, const std::vector<std::string>& args, py::object callback) {
-        PipelineOptions opt = options_of(Command::Extract, args);
-        opt.smoothing = false;
-        PyProgress progress(std::move(callback));
-        PipelineReport r;
-        Mesh out = released(progress, [&] { return volume_to_mesh(v.volume, opt, &r, &progress); });
-        Json j = Json::object();
-        j.set("extract", to_json(r.extract));
-        if (r.decimated) j.set("decimate", to_json(r.decimate));
-        j.set("warnings", Json::array(r.warnings)).set("version", version());
-        return mesh_and_report(std::move(out), j);
-    }, py::arg("volume"), py::arg("args"), py::arg("progress"));
+    m.def(
+        "extract",
+        [](const PyVolume& v, const std::vector<std::string>& args, py::object callback) {
+            PipelineOptions opt = options_of(Command::Extract, args);
+            opt.smoothing = false;
+            PyProgress progress(std::move(callback));
+            PipelineReport r;
+            Mesh out = released(progress, [&] { return volume_to_mesh(v.volume, opt, &r, &progress); });
+            Json j = Json::object();
+            j.set("extract", to_json(r.extract));
+            if (r.decimated) j.set("decimate", to_json(r.decimate));
+            j.set("warnings", Json::array(r.warnings)).set("version", version());
+            return mesh_and_report(std::move(out), j);
+        },
+        py::arg("volume"), py::arg("args"), py::arg("progress"));
 
-    m.def("compare", [](const Mesh& reference, const Mesh& candidate, std::size_t samples, std::uint64_t seed,
-                        double crease_angle, double crease_radius, bool correspondence, bool self_intersections) {
-        CompareReport report;
-        report.reference = "reference";
-        report.options.sampling.samples = samples;
-        report.options.sampling.seed = seed;
-        report.options.crease.angle_deg = crease_angle;
-        report.options.crease.radius_relative = crease_radius;
-        report.options.correspondence = correspondence;
-        {
-            py::gil_scoped_release release;
-            CompareReportRow row;
-            row.name = "candidate";
-            if (correspondence) {
-                const std::string mismatch = correspondence_mismatch(candidate, reference);
-                if (!mismatch.empty()) throw InvalidInput("correspondence: " + mismatch);
-            }
-            row.comparison = compare_meshes(candidate, reference, report.options);
+    m.def(
+        "compare",
+        [](const Mesh& reference, const Mesh& candidate, std::size_t samples, std::uint64_t seed, double crease_angle,
+           double crease_radius, bool correspondence, bool self_intersections) {
+            CompareReport report;
+            report.reference = "reference";
+            report.options.sampling.samples = samples;
+            report.options.sampling.seed = seed;
+            report.options.crease.angle_deg = crease_angle;
+            report.options.crease.radius_relative = crease_radius;
+            report.options.correspondence = correspondence;
+            {
+                py::gil_scoped_release release;
+                CompareReportRow row;
+                row.name = "candidate";
+                if (correspondence) {
+                    const std::string mismatch = correspondence_mismatch(candidate, reference);
+                    if (!mismatch.empty()) throw InvalidInput("correspondence: " + mismatch);
+                }
+                row.comparison = compare_meshes(candidate, reference, report.options);
 #ifdef NORMALFLOW_HAS_CGAL
-            if (self_intersections) row.self_intersections = static_cast<long long>(count_self_intersections(candidate));
+                if (self_intersections)
+                    row.self_intersections = static_cast<long long>(count_self_intersections(candidate));
 #else
-            (void)self_intersections;
+                (void)self_intersections;
 #endif
-            report.rows.push_back(std::move(row));
-        }
-        return to_json(report).dump();
-    }, py::arg("reference"), py::arg("candidate"), py::arg("samples"), py::arg("seed"), py::arg("crease_angle"),
-       py::arg("crease_radius"), py::arg("correspondence"), py::arg("self_intersections"));
+                report.rows.push_back(std::move(row));
+            }
+            return to_json(report).dump();
+        },
+        py::arg("reference"), py::arg("candidate"), py::arg("samples"), py::arg("seed"), py::arg("crease_angle"),
+        py::arg("crease_radius"), py::arg("correspondence"), py::arg("self_intersections"));
     {
         const CompareOptions d;
-        m.attr("COMPARE_DEFAULTS") = py::dict(py::arg("samples") = d.sampling.samples, py::arg("seed") = d.sampling.seed,
-                                              py::arg("crease_angle") = d.crease.angle_deg,
-                                              py::arg("crease_radius") = d.crease.radius_relative);
+        m.attr("COMPARE_DEFAULTS") =
+            py::dict(py::arg("samples") = d.sampling.samples, py::arg("seed") = d.sampling.seed,
+                     py::arg("crease_angle") = d.crease.angle_deg, py::arg("crease_radius") = d.crease.radius_relative);
     }
 
-    m.def("noise", [](const Mesh& mesh, double sigma, std::uint64_t seed, const std::string& kind,
-                      const std::string& direction, double fraction) {
-        NoiseOptions o;
-        o.sigma = sigma;
-        o.seed = seed;
-        if (kind != "gaussian" && kind != "impulsive") throw InvalidInput("kind: expected gaussian or impulsive, got " + kind);
-        if (direction != "normal" && direction != "random")
-            throw InvalidInput("direction: expected normal or random, got " + direction);
-        o.kind = kind == "gaussian" ? NoiseKind::Gaussian : NoiseKind::Impulsive;
-        o.direction = direction == "normal" ? NoiseDirection::Normal : NoiseDirection::Random;
-        o.impulsive_fraction = fraction;
-        Mesh out = mesh;
-        NoiseReport r;
-        {
-            py::gil_scoped_release release;
-            r = add_noise(out, o);
-        }
-        Json j = Json::object();
-        j.set("sigma", o.sigma).set("seed", static_cast<unsigned long long>(o.seed)).set("kind", kind).set("direction", direction);
-        j.set("mean_edge_length", r.mean_edge_length).set("sigma_world", r.sigma_world);
-        j.set("vertices", r.vertices).set("displaced", r.displaced).set("rms_displacement", r.rms_displacement);
-        return mesh_and_report(std::move(out), j);
-    }, py::arg("mesh"), py::arg("sigma"), py::arg("seed"), py::arg("kind"), py::arg("direction"), py::arg("fraction"));
+    m.def(
+        "noise",
+        [](const Mesh& mesh, double sigma, std::uint64_t seed, const std::string& kind, const std::string& direction,
+           double fraction) {
+            NoiseOptions o;
+            o.sigma = sigma;
+            o.seed = seed;
+            if (kind != "gaussian" && kind != "impulsive")
+                throw InvalidInput("kind: expected gaussian or impulsive, got " + kind);
+            if (direction != "normal" && direction != "random")
+                throw InvalidInput("direction: expected normal or random, got " + direction);
+            o.kind = kind == "gaussian" ? NoiseKind::Gaussian : NoiseKind::Impulsive;
+            o.direction = direction == "normal" ? NoiseDirection::Normal : NoiseDirection::Random;
+            o.impulsive_fraction = fraction;
+            Mesh out = mesh;
+            NoiseReport r;
+            {
+                py::gil_scoped_release release;
+                r = add_noise(out, o);
+            }
+            Json j = Json::object();
+            j.set("sigma", o.sigma)
+                .set("seed", static_cast<unsigned long long>(o.seed))
+                .set("kind", kind)
+                .set("direction", direction);
+            j.set("mean_edge_length", r.mean_edge_length).set("sigma_world", r.sigma_world);
+            j.set("vertices", r.vertices).set("displaced", r.displaced).set("rms_displacement", r.rms_displacement);
+            return mesh_and_report(std::move(out), j);
+        },
+        py::arg("mesh"), py::arg("sigma"), py::arg("seed"), py::arg("kind"), py::arg("direction"), py::arg("fraction"));
     {
         const NoiseOptions d;
-        m.attr("NOISE_DEFAULTS") = py::dict(py::arg("sigma") = d.sigma, py::arg("seed") = d.seed,
-                                            py::arg("fraction") = d.impulsive_fraction);
+        m.attr("NOISE_DEFAULTS") =
+            py::dict(py::arg("sigma") = d.sigma, py::arg("seed") = d.seed, py::arg("fraction") = d.impulsive_fraction);
     }
 
 #ifdef NORMALFLOW_HAS_OPENMESH
-    m.def("taubin", [](const Mesh& mesh, int iterations, double lambda, double mu, bool fix_boundary, py::object callback) {
-        TaubinOptions o;
-        o.iterations = iterations;
-        o.lambda = lambda;
-        o.mu = mu;
-        o.fix_boundary = fix_boundary;
-        Mesh out = mesh;
-        PyProgress progress(std::move(callback));
-        const SmoothingReport r = released(progress, [&] { return taubin_smooth(out, o, &progress); });
-        Json j = Json::object();
-        j.set("vertices", r.vertices).set("triangles", out.triangles.size()).set("faces_skipped", r.faces_skipped);
-        j.set("boundary_vertices", r.boundary_vertices).set("iterations", r.iterations);
-        j.set("max_displacement", r.max_displacement).set("warnings", Json::array(r.warnings));
-        return mesh_and_report(std::move(out), j);
-    }, py::arg("mesh"), py::arg("iterations"), py::arg("lambda_"), py::arg("mu"), py::arg("fix_boundary"), py::arg("progress"));
+    m.def(
+        "taubin",
+        [](const Mesh& mesh, int iterations, double lambda, double mu, bool fix_boundary, py::object callback) {
+            TaubinOptions o;
+            o.iterations = iterations;
+            o.lambda = lambda;
+            o.mu = mu;
+            o.fix_boundary = fix_boundary;
+            Mesh out = mesh;
+            PyProgress progress(std::move(callback));
+            const SmoothingReport r = released(progress, [&] { return taubin_smooth(out, o, &progress); });
+            Json j = Json::object();
+            j.set("vertices", r.vertices).set("triangles", out.triangles.size()).set("faces_skipped", r.faces_skipped);
+            j.set("boundary_vertices", r.boundary_vertices).set("iterations", r.iterations);
+            j.set("max_displacement", r.max_displacement).set("warnings", Json::array(r.warnings));
+            return mesh_and_report(std::move(out), j);
+        },
+        py::arg("mesh"), py::arg("iterations"), py::arg("lambda_"), py::arg("mu"), py::arg("fix_boundary"),
+        py::arg("progress"));
     {
         const TaubinOptions d;
-        m.attr("TAUBIN_DEFAULTS") = py::dict(py::arg("iterations") = d.iterations, py::arg("lambda_") = d.lambda,
-                                             py::arg("mu") = d.mu);
+        m.attr("TAUBIN_DEFAULTS") =
+            py::dict(py::arg("iterations") = d.iterations, py::arg("lambda_") = d.lambda, py::arg("mu") = d.mu);
     }
 #endif
 }

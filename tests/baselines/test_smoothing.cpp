@@ -85,8 +85,8 @@ TEST(Smoothing, TaubinDenoisesWithoutShrinkingLaplacianShrinks) {
     laplacian_smooth(lap, lo);
 
     EXPECT_LT(rms_radial_error(taubin, 1.0), 0.5 * e0);
-    EXPECT_NEAR(mean_radius(taubin), 1.0, 0.003);     // barely shrinks
-    EXPECT_LT(mean_radius(lap), 0.99);               // shrinks
+    EXPECT_NEAR(mean_radius(taubin), 1.0, 0.003);  // barely shrinks
+    EXPECT_LT(mean_radius(lap), 0.99);             // shrinks
     EXPECT_GT(1.0 - mean_radius(lap), 5 * std::abs(1.0 - mean_radius(taubin)));
 }
 
@@ -128,7 +128,8 @@ TEST(Smoothing, IndependentOfThreadCount) {
 TEST(Smoothing, NonManifoldSoupIsAcceptedAndReported) {
     // Three triangles on one edge, plus an unreferenced point.
     Mesh m;
-    m.positions = {Vec3f(0, 0, 0), Vec3f(1, 0, 0), Vec3f(0.5f, 1, 0), Vec3f(0.5f, -1, 0), Vec3f(0.5f, 0, 1), Vec3f(9, 9, 9)};
+    m.positions = {Vec3f(0, 0, 0),     Vec3f(1, 0, 0),    Vec3f(0.5f, 1, 0),
+                   Vec3f(0.5f, -1, 0), Vec3f(0.5f, 0, 1), Vec3f(9, 9, 9)};
     m.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
     const SmoothingReport r = taubin_smooth(m, {});
     EXPECT_EQ(r.faces_skipped, 1u);
@@ -166,10 +167,11 @@ TEST(Smoothing, RealPairCorrespondenceFandisk) {
     bilateral_normal_filter(b, {});
     const CorrespondenceErrors e0 = correspondence_errors(noisy, gt), et = correspondence_errors(t, gt),
                                eb = correspondence_errors(b, gt);
-    std::printf("fandisk_n0.3 face angle / mean vertex distance (/ diag): noisy %.2f° %.3e, Taubin %.2f° %.3e, "
-                "bilateral %.2f° %.3e\n", e0.mean_face_angle_deg, e0.mean_vertex_distance_relative,
-                et.mean_face_angle_deg, et.mean_vertex_distance_relative, eb.mean_face_angle_deg,
-                eb.mean_vertex_distance_relative);
+    std::printf(
+        "fandisk_n0.3 face angle / mean vertex distance (/ diag): noisy %.2f° %.3e, Taubin %.2f° %.3e, "
+        "bilateral %.2f° %.3e\n",
+        e0.mean_face_angle_deg, e0.mean_vertex_distance_relative, et.mean_face_angle_deg,
+        et.mean_vertex_distance_relative, eb.mean_face_angle_deg, eb.mean_vertex_distance_relative);
     EXPECT_EQ(e0.faces, gt.triangles.size());
     EXPECT_EQ(e0.degenerate_faces, 0u);
     EXPECT_LT(et.mean_face_angle_deg, 0.5 * e0.mean_face_angle_deg);

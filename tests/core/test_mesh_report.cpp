@@ -131,16 +131,19 @@ TEST(MeshReport, BoundaryLoopsCountHolesNotEdges) {
     // two separate open cubes: two loops
     Mesh one = cube();
     one.triangles.erase(one.triangles.begin(), one.triangles.begin() + 2);
-    EXPECT_EQ(nf::mesh_report(concat(one, [&] {
-                  Mesh o = one;
-                  for (Vec3f& p : o.positions) p.x += 3;
-                  return o;
-              }())).boundary_loops, 2u);
+    EXPECT_EQ(nf::mesh_report(concat(one,
+                                     [&] {
+                                         Mesh o = one;
+                                         for (Vec3f& p : o.positions) p.x += 3;
+                                         return o;
+                                     }()))
+                  .boundary_loops,
+              2u);
 }
 
 TEST(MeshReport, TwoTetsSharingAnEdgeGiveOneNonManifoldEdge) {
     Mesh m = tetrahedron();
-    m.positions.push_back({1, 1, -1});  // 4
+    m.positions.push_back({1, 1, -1});      // 4
     m.positions.push_back({0.5f, -1, -1});  // 5
     // A second closed tet on vertices {0, 1, 4, 5}; edge {0,1} now has 4 faces.
     const Mesh t2{{}, {{0, 1, 4}, {0, 5, 1}, {0, 4, 5}, {1, 5, 4}}};
@@ -268,7 +271,7 @@ TEST(MeshReport, InvariantUnderFaceOrderVertexOrderAndCornerRotation) {
     // Property: relabelling vertices, shuffling faces and rotating corners changes no count.
     const Mesh base = concat(concat(cube(), cube({1, 1, 1})), tetrahedron());  // touches, overlaps
     Mesh m = base;
-    m.triangles.push_back(m.triangles[3]);  // a duplicate
+    m.triangles.push_back(m.triangles[3]);            // a duplicate
     std::swap(m.triangles[5][0], m.triangles[5][1]);  // a flip
     const auto ref = nf::mesh_report(m);
     std::mt19937 rng(7);

@@ -68,12 +68,22 @@ TEST(VolumeCheck, BadBackgroundOrHalfWidth) {
 }
 
 TEST(VolumeCheck, BadBlockLayout) {
-    expect_refused<InvalidInput>([](Volume& v) { v.block_dims[0] = 2; }, "block_dims 2 x 2 x 2 do not match dims 20 x 12 x 9");
-    expect_refused<InvalidInput>([](Volume& v) { v.block_table.pop_back(); }, "block_table has 11 entries, expected 12");
+    expect_refused<InvalidInput>([](Volume& v) { v.block_dims[0] = 2; },
+                                 "block_dims 2 x 2 x 2 do not match dims 20 x 12 x 9");
+    expect_refused<InvalidInput>([](Volume& v) { v.block_table.pop_back(); },
+                                 "block_table has 11 entries, expected 12");
     expect_refused<InvalidInput>([](Volume& v) { v.values.resize(v.values.size() - 1); },
                                  "values has 1023 samples, expected 512 per block");
-    expect_refused<InvalidInput>([](Volume& v) { v.block_coords[1] = {3, 0, 0}; }, "block 1 has coordinates (3, 0, 0) outside");
-    expect_refused<InvalidInput>([](Volume& v) { v.block_coords[1] = {0, -1, 0}; }, "block 1 has coordinates (0, -1, 0)");
+    expect_refused<InvalidInput>(
+        [](Volume& v) {
+            v.block_coords[1] = {3, 0, 0};
+        },
+        "block 1 has coordinates (3, 0, 0) outside");
+    expect_refused<InvalidInput>(
+        [](Volume& v) {
+            v.block_coords[1] = {0, -1, 0};
+        },
+        "block 1 has coordinates (0, -1, 0)");
     // Two blocks swapped in the table.
     expect_refused<InvalidInput>(
         [](Volume& v) {

@@ -25,7 +25,7 @@ TEST(DracoAttributes, PlainGlbKeepsEveryAttribute) {
     ASSERT_EQ(back.triangles.size(), m.triangles.size());
     const auto e = attribute_errors(m, back, 0.0);
     EXPECT_LE(e.normal_deg, 1e-3);
-    EXPECT_EQ(e.color, 0.0);  // sRGB bytes -> linear float -> the same bytes
+    EXPECT_EQ(e.color, 0.0);      // sRGB bytes -> linear float -> the same bytes
     EXPECT_LE(e.texcoord, 1e-6);  // v flipped on writing and on reading
 }
 
@@ -38,7 +38,7 @@ TEST(DracoAttributes, DrcKeepsAttributesWithinQuantisation) {
     ASSERT_EQ(back.triangles.size(), m.triangles.size());
     const auto e = attribute_errors(m, back, 2.0 / ((1 << o.position_bits) - 1));
     EXPECT_LE(e.normal_deg, 0.5);  // 10 bits
-    EXPECT_EQ(e.color, 0.0);  // .drc keeps the 8-bit sRGB values
+    EXPECT_EQ(e.color, 0.0);       // .drc keeps the 8-bit sRGB values
     EXPECT_LE(e.texcoord, 1.0 / ((1 << o.texcoord_bits) - 1));
 }
 

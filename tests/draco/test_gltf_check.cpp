@@ -35,10 +35,12 @@ struct Gltf {
     std::string json() const {
         return R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0})" + extra_nodes +
                R"(],"meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],)"
-               R"("accessors":[{"bufferView":0,"componentType":)" + component_type + R"(,"count":)" + position_count +
+               R"("accessors":[{"bufferView":0,"componentType":)" +
+               component_type + R"(,"count":)" + position_count +
                R"(,"type":"VEC3"},{"bufferView":1,"componentType":5125,"count":)" + index_count +
                R"(,"type":"SCALAR"}],"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},)"
-               R"({"buffer":0,"byteOffset":)" + index_offset + R"(,"byteLength":12}],"buffers":[{"byteLength":48}]})";
+               R"({"buffer":0,"byteOffset":)" +
+               index_offset + R"(,"byteLength":12}],"buffers":[{"byteLength":48}]})";
     }
     std::string bin() const {
         std::string b(48, '\0');
@@ -94,7 +96,8 @@ TEST(GltfCheck, OtherStructuralErrors) {
     EXPECT_NE(gltf_error(g).find("index 2 is 3, but POSITION has 3 elements"), std::string::npos) << gltf_error(g);
     g = Gltf{};
     g.index_offset = "40";  // bufferView 1 ends at 52 > 48
-    EXPECT_NE(gltf_error(g).find("bufferView 1: bytes [40, 52) lie outside buffer 0"), std::string::npos) << gltf_error(g);
+    EXPECT_NE(gltf_error(g).find("bufferView 1: bytes [40, 52) lie outside buffer 0"), std::string::npos)
+        << gltf_error(g);
     g = Gltf{};
     g.component_type = "5127";
     EXPECT_NE(gltf_error(g).find("componentType 5127 is not valid"), std::string::npos) << gltf_error(g);
@@ -111,14 +114,10 @@ TEST(GltfCheck, OtherStructuralErrors) {
 TEST(GltfRead, MalformedAccessorIsRefusedBeforeDraco) {
     test::TempDir dir;
     Gltf g;
-    {
-        std::ofstream(dir / "ok.glb", std::ios::binary) << g.glb();
-    }
+    { std::ofstream(dir / "ok.glb", std::ios::binary) << g.glb(); }
     EXPECT_EQ(read_mesh(dir / "ok.glb").triangles.size(), 1u);
     g.position_count = "1000";
-    {
-        std::ofstream(dir / "bad.glb", std::ios::binary) << g.glb();
-    }
+    { std::ofstream(dir / "bad.glb", std::ios::binary) << g.glb(); }
     try {
         read_mesh(dir / "bad.glb");
         FAIL() << "no exception";
@@ -135,8 +134,7 @@ TEST(GltfRead, FuzzFindingsGiveCleanErrors) {
     try {
         read_mesh(root + "drc/drc-80305ea16b7105675d33939fe7ec2e96f52b1831.drc");
     } catch (const InvalidInput&) {
-    } catch (const IoError&) {
-    }
+    } catch (const IoError&) {}
     SUCCEED();
 }
 

@@ -3,9 +3,9 @@
 // mesh, components, determinism, volume file round trips.
 #include "extract/extract_surface.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -14,13 +14,13 @@
 
 #include <gtest/gtest.h>
 
+#include "../sdf/sdf_test_meshes.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "io/cgal/repair.h"
 #include "io/io.h"
 #include "metrics/surface_distance.h"
 #include "sdf/scan_convert.h"
-#include "../sdf/sdf_test_meshes.h"
 
 namespace normalflow {
 namespace {
@@ -63,8 +63,10 @@ TEST(Extract, PlaneLevelSetIsExact) {
         for (int j = 0; j < 16; ++j)
             for (int i = 0; i < 16; ++i) {
                 const double phi = dot(g.world(Vec3d(i, j, k)) - Vec3d{4, 4, 4}, n);
-                if (std::abs(phi) < 1.5) v.set(i, j, k, float(phi));
-                else if (phi < 0) v.set(i, j, k, -1.5f);
+                if (std::abs(phi) < 1.5)
+                    v.set(i, j, k, float(phi));
+                else if (phi < 0)
+                    v.set(i, j, k, -1.5f);
             }
     ExtractReport rep;
     const Mesh out = extract_surface(v, {}, &rep);

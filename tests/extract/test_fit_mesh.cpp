@@ -9,8 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <cstdint>
+#include <map>
 #include <random>
 
 #include "core/errors.h"
@@ -254,7 +254,8 @@ TEST(FitMesh, CoincidentPositionsMoveTogether) {
     fit_mesh_to_volume(b, v);
     for (std::size_t f = 0; f < welded.triangles.size(); ++f)
         for (int k = 0; k < 3; ++k)
-            EXPECT_EQ(Vec3d(b.positions[3 * f + std::size_t(k)]), Vec3d(a.positions[welded.triangles[f][std::size_t(k)]]));
+            EXPECT_EQ(Vec3d(b.positions[3 * f + std::size_t(k)]),
+                      Vec3d(a.positions[welded.triangles[f][std::size_t(k)]]));
 }
 
 TEST(FitMesh, SameResultWithOneAndTwoThreads) {

@@ -107,7 +107,7 @@ TEST(Attributes, ObjColoursInEitherRangeAndShortTexcoords) {
     const Mesh m = read_obj_memory(s, "c.obj");
     ASSERT_EQ(m.colors.size(), 3u);
     EXPECT_EQ(m.colors[0], (Rgba8{255, 0, 128, 255}));
-    EXPECT_EQ(m.colors[1], (Rgba8{0, 255, 0, 255}));  // a value above 1: the line is in 0..255
+    EXPECT_EQ(m.colors[1], (Rgba8{0, 255, 0, 255}));      // a value above 1: the line is in 0..255
     EXPECT_EQ(m.colors[2], (Rgba8{255, 255, 255, 255}));  // no colour on its line: white
     EXPECT_EQ(m.texcoords[0], (TexCoord{0.25f, 0.0f}));
     EXPECT_EQ(m.texcoords[1], (TexCoord{0.5f, 0.75f}));
@@ -117,14 +117,16 @@ TEST(Attributes, ObjColoursInEitherRangeAndShortTexcoords) {
 TEST(Attributes, ObjSharedCornersAreNotSplitConflictingOnesAre) {
     // Two triangles sharing edge 2-3: the same (vt, vn) on both sides keeps 4 vertices; a seam in vt
     // on vertex 3 gives it one copy, used by the second triangle only.
-    const std::string same = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nvt 9 9\n"
-                             "f 1/1 2/2 3/3\nf 2/2 4/4 3/3\n";
+    const std::string same =
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nvt 9 9\n"
+        "f 1/1 2/2 3/3\nf 2/2 4/4 3/3\n";
     ReadInfo info;
     const Mesh a = read_obj_memory(same, "same.obj", &info);
     EXPECT_EQ(a.positions.size(), 4u);
     EXPECT_TRUE(info.warnings.empty());
-    const std::string seam = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nvt 9 9\n"
-                             "f 1/1 2/2 3/3\nf 2/2 4/4 3/5\n";
+    const std::string seam =
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\nvt 9 9\n"
+        "f 1/1 2/2 3/3\nf 2/2 4/4 3/5\n";
     const Mesh b = read_obj_memory(seam, "seam.obj", &info);
     ASSERT_EQ(b.positions.size(), 5u);
     EXPECT_EQ(b.positions[4], b.positions[2]);
@@ -133,7 +135,8 @@ TEST(Attributes, ObjSharedCornersAreNotSplitConflictingOnesAre) {
     EXPECT_EQ(b.texcoords[2], (TexCoord{0, 1}));
     EXPECT_EQ(b.texcoords[4], (TexCoord{9, 9}));
     ASSERT_EQ(info.warnings.size(), 1u);
-    EXPECT_EQ(info.warnings[0], "1 vertices duplicated where their corners have different texture coordinates or normals");
+    EXPECT_EQ(info.warnings[0],
+              "1 vertices duplicated where their corners have different texture coordinates or normals");
 }
 
 TEST(Attributes, ObjBrokenAttributeReferencesDropTheAttributeNotTheFile) {
@@ -142,8 +145,9 @@ TEST(Attributes, ObjBrokenAttributeReferencesDropTheAttributeNotTheFile) {
     EXPECT_EQ(m.positions.size(), 3u);
     EXPECT_FALSE(m.has_texcoords());
     ASSERT_EQ(info.warnings.size(), 1u);
-    EXPECT_EQ(info.warnings[0],
-              "texture coordinate index -3 at line 5 reaches before the first one; the texture coordinates are ignored");
+    EXPECT_EQ(
+        info.warnings[0],
+        "texture coordinate index -3 at line 5 reaches before the first one; the texture coordinates are ignored");
 }
 
 TEST(Attributes, MisSizedAttributesAreRefusedAndNothingIsWritten) {
@@ -155,7 +159,8 @@ TEST(Attributes, MisSizedAttributesAreRefusedAndNothingIsWritten) {
         const std::string path = dir / ("bad" + std::string(ext));
         try {
             write_mesh(path, m);
-            ADD_FAILURE() << ext << " accepted " << m.colors.size() << " colours for " << m.positions.size() << " vertices";
+            ADD_FAILURE() << ext << " accepted " << m.colors.size() << " colours for " << m.positions.size()
+                          << " vertices";
         } catch (const InvalidInput& e) {
             EXPECT_NE(std::string(e.what()).find(std::to_string(m.colors.size()) + " colours for " +
                                                  std::to_string(m.positions.size()) + " vertices"),

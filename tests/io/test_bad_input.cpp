@@ -1,12 +1,12 @@
 // Bad input for the mesh readers and writers (io/formats/mesh_formats.h, io/io.h): every truncation
 // of a small valid file, garbage, bit flips, NaN, out-of-range indices, faces with < 3 corners,
 // absurd header counts, missing files, unknown extensions, unwritable paths, failed writes.
-#include "support/test_files.h"
 #include "io/formats/mesh_formats.h"
+#include "support/test_files.h"
 
-#include <vector>
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <vector>
 
 #include <cstring>
 #include <filesystem>
@@ -140,8 +140,10 @@ TEST(Truncation, CountedTextFormatsAcceptOnlyTrailingWhitespaceCuts) {
     const struct {
         std::string path;
         Reader read;
-    } cases[] = {{kFixtures + "/cube_ascii.ply", kPly}, {kFixtures + "/cube_colors.off", kOff},
-                 {dir / "w.ply", kPly}, {dir / "w.off", kOff}};
+    } cases[] = {{kFixtures + "/cube_ascii.ply", kPly},
+                 {kFixtures + "/cube_colors.off", kOff},
+                 {dir / "w.ply", kPly},
+                 {dir / "w.off", kOff}};
     for (const auto& c : cases) {
         SCOPED_TRACE(c.path);
         const std::string full = slurp(c.path);
@@ -189,7 +191,8 @@ TEST(Truncation, ObjPrefixIsErrorOrShorterValidFile) {
         ASSERT_TRUE(read_whole);
         const Mesh& whole = *read_whole;
         std::size_t file_vertices = full.starts_with("v ") ? 1 : 0;
-        for (std::size_t at = full.find("\nv "); at != std::string::npos; at = full.find("\nv ", at + 1)) ++file_vertices;
+        for (std::size_t at = full.find("\nv "); at != std::string::npos; at = full.find("\nv ", at + 1))
+            ++file_vertices;
         const std::size_t first_face = full.find("\nf ");
         ASSERT_NE(first_face, std::string::npos);
         // end of the first face line (its '\n'): a prefix shorter than this has no complete face
@@ -208,7 +211,8 @@ TEST(Truncation, ObjPrefixIsErrorOrShorterValidFile) {
             // the file's vertices come first; copies split off for differing texture coordinates follow
             ASSERT_GE(r->positions.size(), file_vertices) << "L = " << L;
             ASSERT_TRUE(std::equal(whole.positions.begin(), whole.positions.begin() + std::ptrdiff_t(file_vertices),
-                                   r->positions.begin())) << "L = " << L;
+                                   r->positions.begin()))
+                << "L = " << L;
             ASSERT_FALSE(r->triangles.empty());
             ASSERT_LE(r->triangles.size(), whole.triangles.size());
             // same corners in the same places (a cut corner may lose its texture coordinate, and so use the
@@ -233,9 +237,11 @@ TEST(Garbage, RandomBytesNeverCrash) {
     for (int trial = 0; trial < 200; ++trial) {
         std::string g(std::size_t(1 + trial * 13 % 700), '\0');
         for (char& c : g) c = char(byte(rng));
-        if (trial % 4 == 1) g = "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\n"
-                                "property float y\nproperty float z\nelement face 12\n"
-                                "property list uchar int vertex_indices\nend_header\n" + g;
+        if (trial % 4 == 1)
+            g = "ply\nformat binary_little_endian 1.0\nelement vertex 8\nproperty float x\n"
+                "property float y\nproperty float z\nelement face 12\n"
+                "property list uchar int vertex_indices\nend_header\n" +
+                g;
         if (trial % 4 == 2) g = "solid x\n" + g;
         if (trial % 4 == 3) g = "OFF\n8 12 0\n" + g;
         for (const Reader* r : {&kObj, &kPly, &kOff, &kStl}) {
@@ -280,10 +286,11 @@ TEST(BadContents, NanAndInfCoordinates) {
     expect_invalid(kObj, "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", "n.obj", {"line 2", "NaN"});
     expect_invalid(kObj, "v 0 0 0\nv 1 0 0\nv 0 1 1e39\nf 1 2 3\n", "n.obj", {"line 3", "NaN or infinite"});
     expect_invalid(kOff, "OFF\n3 1 0\n0 0 0\n1 0 0\ninf 1 0\n3 0 1 2\n", "n.off", {"line 5", "NaN"});
-    expect_invalid(kPly,
-                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 -inf\n0 1 0\n3 0 1 2\n",
-                   "n.ply", {"line 11", "NaN"});
+    expect_invalid(
+        kPly,
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 -inf\n0 1 0\n3 0 1 2\n",
+        "n.ply", {"line 11", "NaN"});
     // binary PLY with a NaN float, and with a double beyond float range
     std::string b =
         "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
@@ -301,8 +308,10 @@ TEST(BadContents, NanAndInfCoordinates) {
     d.append(reinterpret_cast<const char*>(dv), sizeof dv);
     d.append(face, sizeof face);
     expect_invalid(kPly, d, "d.ply", {"vertex 2", "out-of-float-range"});
-    expect_invalid(kStl, "solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nvertex 0 1 0\n"
-                         "endloop\nendfacet\nendsolid s\n", "n.stl", {"line 5", "NaN"});
+    expect_invalid(kStl,
+                   "solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex nan 0 0\nvertex 0 1 0\n"
+                   "endloop\nendfacet\nendsolid s\n",
+                   "n.stl", {"line 5", "NaN"});
     // binary STL with an infinite coordinate
     std::string s(80, 'x');
     const std::uint32_t one = 1;
@@ -342,17 +351,22 @@ TEST(BadContents, FacesWithFewerThanThreeCorners) {
                    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                    "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n",
                    "c.ply", {"line 13", "2 corners"});
-    expect_invalid(kStl, "solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
-                         "endloop\nendfacet\nendsolid s\n", "c.stl", {"line 6", "2 vertices"});
+    expect_invalid(kStl,
+                   "solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                   "endloop\nendfacet\nendsolid s\n",
+                   "c.stl", {"line 6", "2 vertices"});
 }
 
 TEST(BadContents, NoFaces) {
     expect_invalid(kObj, "# only points\nv 0 0 0\nv 1 0 0\n", "p.obj", {"no faces"});
     expect_invalid(kOff, "OFF\n1 0 0\n0 0 0\n", "p.off", {"no faces"});
-    expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                         "property float z\nend_header\n0 0 0\n", "p.ply", {"no 'face' element"});
-    expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
-                         "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
+    expect_invalid(kPly,
+                   "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                   "property float z\nend_header\n0 0 0\n",
+                   "p.ply", {"no 'face' element"});
+    expect_invalid(kPly,
+                   "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                   "property float z\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n",
                    "p.ply", {"no faces"});
     expect_invalid(kStl, "solid s\nendsolid s\n", "p.stl", {"no faces"});
     std::string s(80, 'x');
@@ -362,12 +376,15 @@ TEST(BadContents, NoFaces) {
 
 TEST(BadContents, AbsurdCountsFailBeforeAllocating) {
     // 10^12 vertices would need 12 TB: the check against the file size must come first.
-    expect_invalid(kPly, "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\n"
-                         "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
-                         "end_header\n\x01\x02\x03", "a.ply", {"1000000000000", "bytes"});
-    expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                         "property float y\nproperty float z\nelement face 18446744073709551615\n"
-                         "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    expect_invalid(kPly,
+                   "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\n"
+                   "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                   "end_header\n\x01\x02\x03",
+                   "a.ply", {"1000000000000", "bytes"});
+    expect_invalid(kPly,
+                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                   "property float y\nproperty float z\nelement face 18446744073709551615\n"
+                   "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
                    "a.ply", {"18446744073709551615"});
     expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nend_header\n", "a.ply",
                    {"line 3"});
@@ -401,17 +418,23 @@ TEST(BadContents, MalformedSyntax) {
     expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", "m.ply", {"end_header"});
     expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float32x x\nend_header\n", "m.ply",
                    {"line 4", "unknown property type"});
-    expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n", "m.ply", {"x, y or z"});
-    expect_invalid(kPly, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                         "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
-                         "3 0 1 2\n5 5 5\n", "m.ply", {"line 14", "after the last element"});
+    expect_invalid(kPly,
+                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n",
+                   "m.ply", {"x, y or z"});
+    expect_invalid(kPly,
+                   "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                   "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n"
+                   "3 0 1 2\n5 5 5\n",
+                   "m.ply", {"line 14", "after the last element"});
     expect_invalid(kOff, "NOPE\n3 1 0\n", "m.off", {"line 1", "not an OFF file"});
     expect_invalid(kOff, "4OFF\n3 1 0\n", "m.off", {"line 1", "unsupported"});
     expect_invalid(kOff, "OFF BINARY\n3 1 0\n", "m.off", {"line 1", "binary OFF"});
     expect_invalid(kOff, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0 \n", "m.off", {"truncated", "0 of 1 faces"});
-    expect_invalid(kStl, "solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
-                         "endloop\nendfacet\n", "m.stl", {"endsolid"});
+    expect_invalid(kStl,
+                   "solid s\nfacet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+                   "endloop\nendfacet\n",
+                   "m.stl", {"endsolid"});
     expect_invalid(kStl, "solid s\nfacet normal 0 0 0\nouter lop\n", "m.stl", {"line 3", "'lop'"});
     expect_invalid(kStl, "tiny", "m.stl", {"not an STL"});
 }

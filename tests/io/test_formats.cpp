@@ -1,7 +1,7 @@
 // Tests for io/formats/mesh_formats.h and io/io.h: hand-made fixtures with known contents,
 // bit-exact round trips of every format and variant, then real models from shared/data.
-#include "support/test_files.h"
 #include "io/formats/mesh_formats.h"
+#include "support/test_files.h"
 
 #include <gtest/gtest.h>
 
@@ -59,9 +59,18 @@ void expect_expanded(const Mesh& m, const Mesh& stl) {
 /// values that need all 9 significant digits, random bits.
 Mesh tricky_mesh() {
     Mesh m;
-    const float special[] = {0.1f, -0.0f, 1e-30f, 3.4028235e38f, -3.4028235e38f, 1.17549435e-38f,
-                             1.4e-45f /* smallest subnormal */, 123456.789f, 16777217.0f, 0.33333334f,
-                             -2.5e-3f, 7.0f};
+    const float special[] = {0.1f,
+                             -0.0f,
+                             1e-30f,
+                             3.4028235e38f,
+                             -3.4028235e38f,
+                             1.17549435e-38f,
+                             1.4e-45f /* smallest subnormal */,
+                             123456.789f,
+                             16777217.0f,
+                             0.33333334f,
+                             -2.5e-3f,
+                             7.0f};
     for (std::size_t i = 0; i + 2 < std::size(special); i += 3)
         m.positions.push_back({special[i], special[i + 1], special[i + 2]});
     std::mt19937 rng(1234);
@@ -126,7 +135,8 @@ TEST(ReadObj, QuadsWithEveryCornerForm) {
     ASSERT_EQ(info.warnings.size(), 3u);
     EXPECT_NE(info.warnings[0].find("6 faces had more than 3 corners"), std::string::npos) << info.warnings[0];
     EXPECT_EQ(info.warnings[1], "normal index 5 at line 23 is out of range (the file has 2); the normals are ignored");
-    EXPECT_EQ(info.warnings[2], "2 vertices duplicated where their corners have different texture coordinates or normals");
+    EXPECT_EQ(info.warnings[2],
+              "2 vertices duplicated where their corners have different texture coordinates or normals");
 }
 
 TEST(ReadObj, NegativeIndicesCountBackFromTheLastVertexRead) {
@@ -277,9 +287,7 @@ INSTANTIATE_TEST_SUITE_P(AllFormats, RoundTrip,
                          ::testing::Values(Variant{".obj", true, "obj"}, Variant{".ply", true, "ply-binary-le"},
                                            Variant{".ply", false, "ply-ascii"}, Variant{".off", true, "off"},
                                            Variant{".stl", true, "stl-binary"}, Variant{".stl", false, "stl-ascii"}),
-                         [](const auto& p) {
-                             return p.param.ext.substr(1) + (p.param.binary ? "_binary" : "_ascii");
-                         });
+                         [](const auto& p) { return p.param.ext.substr(1) + (p.param.binary ? "_binary" : "_ascii"); });
 
 TEST(WriteStl, BinaryHeaderNeverStartsWithSolidAndNormalsAreUnit) {
     TempDir dir;

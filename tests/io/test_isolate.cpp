@@ -2,8 +2,8 @@
 // The glTF structure checks (io/draco/gltf_check.h) are tested in tests/draco/test_gltf_check.cpp.
 #include "io/util/isolate.h"
 
-#include <gtest/gtest.h>
 #include <dirent.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -111,10 +111,13 @@ TEST(Isolate, ExitWithoutResultIsIoError) {
 TEST(Isolate, TimeoutKillsTheChild) {
     const auto t0 = std::chrono::steady_clock::now();
     try {
-        run_isolated("t", []() -> std::string {
-            ::sleep(30);
-            return "late";
-        }, 0.3);
+        run_isolated(
+            "t",
+            []() -> std::string {
+                ::sleep(30);
+                return "late";
+            },
+            0.3);
         FAIL() << "no exception";
     } catch (const IoError& e) {
         EXPECT_NE(std::string(e.what()).find("did not finish"), std::string::npos) << e.what();
@@ -123,8 +126,12 @@ TEST(Isolate, TimeoutKillsTheChild) {
     EXPECT_LT(s, 5.0);
     EXPECT_TRUE(no_children_left());
     // A generous timeout does not get in the way.
-    EXPECT_EQ(run_isolated("t", [] { return std::string("quick"); }, 30.0), "quick");
-    EXPECT_THROW(run_isolated("t", [] { return std::string(); }, -1.0), InvalidInput);
+    EXPECT_EQ(run_isolated(
+                  "t", [] { return std::string("quick"); }, 30.0),
+              "quick");
+    EXPECT_THROW(run_isolated(
+                     "t", [] { return std::string(); }, -1.0),
+                 InvalidInput);
 }
 
 TEST(Isolate, LargePayloadRoundTrip) {
@@ -143,9 +150,12 @@ TEST(Isolate, NoFdLeakNoZombies) {
     run_isolated("t", [] { return std::string("warm-up"); });
     const int before = open_fds();
     for (int i = 0; i < 100; ++i) {
-        if (i % 3 == 0) EXPECT_THROW(run_isolated("t", []() -> std::string { throw InvalidInput("x"); }), InvalidInput);
-        else if (i % 3 == 1) EXPECT_THROW(run_isolated("t", []() -> std::string { ::_exit(1); }), IoError);
-        else EXPECT_EQ(run_isolated("t", [] { return std::string(1000, 'a'); }), std::string(1000, 'a'));
+        if (i % 3 == 0)
+            EXPECT_THROW(run_isolated("t", []() -> std::string { throw InvalidInput("x"); }), InvalidInput);
+        else if (i % 3 == 1)
+            EXPECT_THROW(run_isolated("t", []() -> std::string { ::_exit(1); }), IoError);
+        else
+            EXPECT_EQ(run_isolated("t", [] { return std::string(1000, 'a'); }), std::string(1000, 'a'));
     }
     EXPECT_EQ(open_fds(), before);
     EXPECT_TRUE(no_children_left());
@@ -182,7 +192,13 @@ TEST(Isolate, MeshLayoutRoundTripAndTruncation) {
     EXPECT_TRUE(r.at_end());
     for (std::size_t cut : {std::size_t(0), std::size_t(7), bytes.size() / 2, bytes.size() - 5}) {
         ByteReader short_r(std::string_view(bytes).substr(0, cut), "who");
-        EXPECT_THROW({ get_mesh(short_r); short_r.get<std::int32_t>(); }, IoError) << cut;
+        EXPECT_THROW(
+            {
+                get_mesh(short_r);
+                short_r.get<std::int32_t>();
+            },
+            IoError)
+            << cut;
     }
 }
 
@@ -218,7 +234,8 @@ TEST(VdbRead, IsolatedReadRoundTripsExactlyAfterTbbStarted) {
         EXPECT_NEAR(back.grid.origin.z, 3.0, 1e-12);
         for (int k = 0; k < g.dims[2]; ++k)
             for (int j = 0; j < g.dims[1]; ++j)
-                for (int i = 0; i < g.dims[0]; ++i) ASSERT_EQ(back.value(i, j, k), v.value(i, j, k)) << i << " " << j << " " << k;
+                for (int i = 0; i < g.dims[0]; ++i)
+                    ASSERT_EQ(back.value(i, j, k), v.value(i, j, k)) << i << " " << j << " " << k;
     }
 }
 #endif

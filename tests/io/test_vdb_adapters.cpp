@@ -47,7 +47,8 @@ TEST(VdbAdapters, OpenVdbsLevelSetSphereBecomesTheSameSurface) {
 TEST(VdbAdapters, AVolumeGoesToAGridAndBackUnchangedWithItsPlacement) {
     Volume v = from_openvdb(*sphere());
     const double a = std::numbers::pi / 5;  // turned about z and reflected in z
-    v.grid.placement.rotation = {Vec3d{std::cos(a), std::sin(a), 0}, Vec3d{-std::sin(a), std::cos(a), 0}, Vec3d{0, 0, -1}};
+    v.grid.placement.rotation = {Vec3d{std::cos(a), std::sin(a), 0}, Vec3d{-std::sin(a), std::cos(a), 0},
+                                 Vec3d{0, 0, -1}};
     v.grid.placement.translation = {1.5, -2.0, 0.25};
     const openvdb::FloatGrid::Ptr g = to_openvdb(v);
     EXPECT_EQ(g->getGridClass(), openvdb::GRID_LEVEL_SET);

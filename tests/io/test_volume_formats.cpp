@@ -42,19 +42,19 @@ const std::string kData = std::string(NORMALFLOW_TEST_DATA);
 // A tiny NIfTI writer: the fields read_nifti uses, in either version and byte order.
 
 struct Nifti {
-    int version = 1;                      // 1 or 2
-    bool big = false;                     // big-endian file
+    int version = 1;   // 1 or 2
+    bool big = false;  // big-endian file
     std::array<std::int64_t, 8> dim{3, 1, 1, 1, 1, 1, 1, 1};
     int datatype = 2;
     int bitpix = 8;
     std::array<double, 8> pixdim{1, 1, 1, 1, 0, 0, 0, 0};
-    double vox_offset = -1;               // -1: header size + 4
+    double vox_offset = -1;  // -1: header size + 4
     double slope = 0, inter = 0;
     int qform_code = 0, sform_code = 0;
     std::array<double, 3> quat{0, 0, 0};
     std::array<double, 3> qoffset{0, 0, 0};
     std::array<std::array<double, 4>, 3> srow{};
-    std::string magic;                    // "" = the right one
+    std::string magic;  // "" = the right one
 };
 
 template <class T>
@@ -73,7 +73,8 @@ std::string nifti_header(const Nifti& n) {
     const bool b = n.big;
     put<std::int32_t>(h, 0, std::int32_t(size), b);
     if (n.version == 1) {
-        for (int i = 0; i < 8; ++i) put<std::int16_t>(h, 40 + 2 * std::size_t(i), std::int16_t(n.dim[std::size_t(i)]), b);
+        for (int i = 0; i < 8; ++i)
+            put<std::int16_t>(h, 40 + 2 * std::size_t(i), std::int16_t(n.dim[std::size_t(i)]), b);
         put<std::int16_t>(h, 70, std::int16_t(n.datatype), b);
         put<std::int16_t>(h, 72, std::int16_t(n.bitpix), b);
         for (int i = 0; i < 8; ++i) put<float>(h, 76 + 4 * std::size_t(i), float(n.pixdim[std::size_t(i)]), b);
@@ -86,7 +87,8 @@ std::string nifti_header(const Nifti& n) {
         for (int i = 0; i < 3; ++i) put<float>(h, 268 + 4 * std::size_t(i), float(n.qoffset[std::size_t(i)]), b);
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 4; ++c)
-                put<float>(h, 280 + 16 * std::size_t(r) + 4 * std::size_t(c), float(n.srow[std::size_t(r)][std::size_t(c)]), b);
+                put<float>(h, 280 + 16 * std::size_t(r) + 4 * std::size_t(c),
+                           float(n.srow[std::size_t(r)][std::size_t(c)]), b);
         std::memcpy(h.data() + 344, n.magic.empty() ? "n+1\0" : n.magic.c_str(), 4);
     } else {
         std::memcpy(h.data() + 4, n.magic.empty() ? "n+2\0\r\n\032\n" : n.magic.c_str(), 8);
@@ -103,7 +105,8 @@ std::string nifti_header(const Nifti& n) {
         for (int i = 0; i < 3; ++i) put<double>(h, 376 + 8 * std::size_t(i), n.qoffset[std::size_t(i)], b);
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 4; ++c)
-                put<double>(h, 400 + 32 * std::size_t(r) + 8 * std::size_t(c), n.srow[std::size_t(r)][std::size_t(c)], b);
+                put<double>(h, 400 + 32 * std::size_t(r) + 8 * std::size_t(c), n.srow[std::size_t(r)][std::size_t(c)],
+                            b);
     }
     return h;
 }
@@ -288,7 +291,7 @@ TEST(Nifti, TrailingUnitDimensionsAndExtensionsAccepted) {
     TempDir dir;
     Nifti n = dims3(2, 1, 1, 2, 8);
     n.dim = {5, 2, 1, 1, 1, 1, 0, 0};  // dims beyond dim[0] are not used
-    n.vox_offset = 400;                 // 48 bytes of extensions to skip
+    n.vox_offset = 400;                // 48 bytes of extensions to skip
     std::string h = nifti_header(n);
     std::fill(h.begin() + 352, h.end(), 'x');
     write_file(dir / "e.nii", h + samples<std::uint8_t>({5, 6}, false));
@@ -368,7 +371,13 @@ TEST(Nifti, BadInput) {
     };
     refuse("empty.nii", "", {"empty"});
     refuse("short_header.nii", nifti_header(good).substr(0, 100), {"truncated header"});
-    refuse("short_header2.nii", nifti_header([] { Nifti n; n.version = 2; return n; }()).substr(0, 300),
+    refuse("short_header2.nii",
+           nifti_header([] {
+               Nifti n;
+               n.version = 2;
+               return n;
+           }())
+               .substr(0, 300),
            {"truncated header"});
     refuse("truncated_data.nii", nifti_header(good) + data.substr(0, 20), {"truncated"});
     {
@@ -414,11 +423,13 @@ TEST(Nifti, BadInput) {
         Nifti n = dims3(2, 2, 1, 16, 32);
         refuse("nan.nii", nifti_header(n) + samples<float>({1.f, 2.f, std::nanf(""), 4.f}, false),
                {"sample 2", "(0, 1, 0)", "NaN"});
-        refuse("inf.nii", nifti_header(n) + samples<float>({1.f, std::numeric_limits<float>::infinity(), 0.f, 4.f}, false),
+        refuse("inf.nii",
+               nifti_header(n) + samples<float>({1.f, std::numeric_limits<float>::infinity(), 0.f, 4.f}, false),
                {"sample 1", "infinite"});
         n.datatype = 64;
         n.bitpix = 64;
-        refuse("beyond_float.nii", nifti_header(n) + samples<double>({1, 2, 3, 1e300}, false), {"sample 3", "float range"});
+        refuse("beyond_float.nii", nifti_header(n) + samples<double>({1, 2, 3, 1e300}, false),
+               {"sample 3", "float range"});
         n.datatype = 2;
         n.bitpix = 8;
         n.slope = 1e38f;
@@ -495,8 +506,10 @@ TEST(NrrdImage, BadDetachedHeaders) {
     write_file(dir / "missing.nhdr", head + "data file: nowhere.raw\n");
     for (const bool image : {true, false}) {
         try {
-            if (image) (void)read_nrrd_image(dir / "missing.nhdr");
-            else (void)read_nrrd(dir / "missing.nhdr");
+            if (image)
+                (void)read_nrrd_image(dir / "missing.nhdr");
+            else
+                (void)read_nrrd(dir / "missing.nhdr");
             ADD_FAILURE() << "a missing data file was read";
         } catch (const IoError& e) {
             EXPECT_THAT(std::string(e.what()), HasSubstr("nowhere.raw"));
@@ -506,14 +519,16 @@ TEST(NrrdImage, BadDetachedHeaders) {
         }
     }
     write_file(dir / "list.nhdr", head + "data file: LIST\na.raw\nb.raw\n");
-    expect_error<InvalidInput>([&] { (void)read_nrrd_image(dir / "list.nhdr"); }, {"list.nhdr", "LIST", "single data file"});
+    expect_error<InvalidInput>([&] { (void)read_nrrd_image(dir / "list.nhdr"); },
+                               {"list.nhdr", "LIST", "single data file"});
     write_file(dir / "fmt.nhdr", head + "data file: slice%03d.raw 1 2 1\n");
     expect_error<InvalidInput>([&] { (void)read_nrrd_image(dir / "fmt.nhdr"); }, {"fmt.nhdr", "format string"});
     write_file(dir / "short.raw", std::string(7, '\1'));
     write_file(dir / "short.nhdr", head + "data file: short.raw\n");
     expect_error<InvalidInput>([&] { (void)read_nrrd_image(dir / "short.nhdr"); }, {"short.nhdr", "holds only 7"});
     write_file(dir / "zero.nrrd", head + "spacings: 1 0 1\n\n" + std::string(8, '\0'));
-    expect_error<InvalidInput>([&] { (void)read_nrrd_image(dir / "zero.nrrd"); }, {"zero.nrrd", "spacings: axis 1 is 0"});
+    expect_error<InvalidInput>([&] { (void)read_nrrd_image(dir / "zero.nrrd"); },
+                               {"zero.nrrd", "spacings: axis 1 is 0"});
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -604,8 +619,9 @@ TEST(NrrdPlacement, FlippedDetachedSdfAndRefusals) {
     std::vector<float> v(8);
     for (int i = 0; i < 8; ++i) v[std::size_t(i)] = float(i) - 3.5f;
     write_file(dir / "d.raw", samples(v, false));
-    const std::string head = "NRRD0005\ntype: float\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n"
-                             "data file: d.raw\nspace origin: (1,2,3)\n";
+    const std::string head =
+        "NRRD0005\ntype: float\ndimension: 3\nsizes: 2 2 2\nendian: little\nencoding: raw\n"
+        "data file: d.raw\nspace origin: (1,2,3)\n";
     write_file(dir / "flip.nhdr", head + "space directions: (0,0,-2) (0,2,0) (2,0,0)\n");
     const Volume r = read_nrrd(dir / "flip.nhdr");
     EXPECT_EQ(r.grid.voxel_size, 2.0);

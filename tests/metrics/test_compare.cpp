@@ -176,8 +176,8 @@ TEST(CorrespondenceErrors, OneLiftedCornerOfTheUnitBox) {
 TEST(CorrespondenceErrors, DegenerateFacesAreSkippedAndCounted) {
     Mesh ref = test::box_mesh({0, 0, 0}, {1, 1, 1});
     ref.positions.push_back(Vec3f(0.5f, 0.5f, 0.5f));  // vertex 8, inside
-    ref.triangles.push_back({0, 1, 8});  // a real triangle in the reference...
-    ref.triangles.push_back({2, 2, 3});  // ...and one with a repeated index in both
+    ref.triangles.push_back({0, 1, 8});                // a real triangle in the reference...
+    ref.triangles.push_back({2, 2, 3});                // ...and one with a repeated index in both
     Mesh cand = ref;
     cand.positions[8] = Vec3f(0.5f, 0, 0);  // ...collinear with 0 and 1 in the candidate: zero area
     cand.positions[7] = Vec3f(1, 1, 2);     // the 45° lift of OneLiftedCornerOfTheUnitBox
@@ -216,7 +216,8 @@ TEST(CorrespondenceErrors, MismatchedMeshesAreRefusedByName) {
     EXPECT_EQ(message(fewer_triangles), "correspondence_errors: candidate has 11 triangles, reference 12");
     Mesh reordered = ref;
     std::swap(reordered.triangles[5][1], reordered.triangles[5][2]);
-    EXPECT_EQ(message(reordered), "correspondence_errors: triangle 5 differs: candidate (0, 4, 5), reference (0, 5, 4)");
+    EXPECT_EQ(message(reordered),
+              "correspondence_errors: triangle 5 differs: candidate (0, 4, 5), reference (0, 5, 4)");
     EXPECT_EQ(correspondence_mismatch(reordered, ref), "triangle 5 differs: candidate (0, 4, 5), reference (0, 5, 4)");
     EXPECT_THROW(correspondence_errors(Mesh{}, Mesh{}), InvalidInput);  // no triangles
     Mesh bad = ref, bad_ref = ref;

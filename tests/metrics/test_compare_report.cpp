@@ -65,10 +65,11 @@ TEST(CompareReport, MarkdownTableRows) {
 
 TEST(CompareReport, MarkdownPage) {
     const std::string md = to_markdown(small_report());
-    EXPECT_EQ(md.rfind("# normalflow compare\n\nReference: `ref.ply` (bbox diagonal 10, area 6, volume 1, 1 components, "
-                       "12 feature edges of total length 12)\n\n",
-                       0),
-              0u)
+    EXPECT_EQ(
+        md.rfind("# normalflow compare\n\nReference: `ref.ply` (bbox diagonal 10, area 6, volume 1, 1 components, "
+                 "12 feature edges of total length 12)\n\n",
+                 0),
+        0u)
         << md;
     EXPECT_NE(md.find(std::string(kHeader) + kRowA + kRowB), std::string::npos) << md;
     EXPECT_NE(md.find("from 1000 area-uniform samples on each surface (seed 7)"), std::string::npos) << md;
@@ -113,23 +114,25 @@ CompareReport correspondence_report() {
 
 TEST(CompareReport, CorrespondenceColumns) {
     const CompareReport r = correspondence_report();
-    EXPECT_EQ(compare_table_markdown(r),
-              "| candidate | Hausdorff | Hausdorff / diag | mean | RMS | normal angle ° | area Δ | volume Δ | components | "
-              "closed | manifold | self-int. pairs | crease kept | face-by-face angle ° | vertex dist. | "
-              "vertex dist. / diag | max vertex dist. |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
-              "| a.ply | 0.5 | 5.000e-02 | 0.1 | 0.2 | 3.25 | +1.000% | -2.000% | 1 | yes | yes | - | 87.5% | 7.50 | "
-              "0.125 | 1.250e-02 | 1 |\n"
-              "| b \"<x>\".obj | 0.5 | 5.000e-02 | 0.1 | 0.2 | 3.25 | +1.000% | -2.000% | 1 | no | yes | 7 | 87.5% | - | - "
-              "| - | - |\n");
-    EXPECT_EQ(to_csv(r),
-              "candidate,hausdorff,hausdorff_relative,mean_distance,mean_relative,rms_distance,rms_relative,"
-              "mean_normal_angle_deg,area_change,volume_change,components,closed,manifold,self_intersecting_pairs,"
-              "crease_preservation,crease_mean_angle_deg,face_normal_angle_deg,face_normal_angle_max_deg,"
-              "degenerate_faces,mean_vertex_distance,mean_vertex_distance_relative,max_vertex_distance,"
-              "max_vertex_distance_relative,seconds\n"
-              "\"a.ply\",0.5,0.05,0.1,0.01,0.2,0.02,3.25,0.01,-0.02,1,yes,yes,,0.875,40,7.5,45,2,0.125,0.0125,1,0.1,1.5\n"
-              "\"b \"\"<x>\"\".obj\",0.5,0.05,0.1,0.01,0.2,0.02,3.25,0.01,-0.02,1,no,yes,7,0.875,40,,,,,,,,1.5\n");
+    EXPECT_EQ(
+        compare_table_markdown(r),
+        "| candidate | Hausdorff | Hausdorff / diag | mean | RMS | normal angle ° | area Δ | volume Δ | components | "
+        "closed | manifold | self-int. pairs | crease kept | face-by-face angle ° | vertex dist. | "
+        "vertex dist. / diag | max vertex dist. |\n"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+        "| a.ply | 0.5 | 5.000e-02 | 0.1 | 0.2 | 3.25 | +1.000% | -2.000% | 1 | yes | yes | - | 87.5% | 7.50 | "
+        "0.125 | 1.250e-02 | 1 |\n"
+        "| b \"<x>\".obj | 0.5 | 5.000e-02 | 0.1 | 0.2 | 3.25 | +1.000% | -2.000% | 1 | no | yes | 7 | 87.5% | - | - "
+        "| - | - |\n");
+    EXPECT_EQ(
+        to_csv(r),
+        "candidate,hausdorff,hausdorff_relative,mean_distance,mean_relative,rms_distance,rms_relative,"
+        "mean_normal_angle_deg,area_change,volume_change,components,closed,manifold,self_intersecting_pairs,"
+        "crease_preservation,crease_mean_angle_deg,face_normal_angle_deg,face_normal_angle_max_deg,"
+        "degenerate_faces,mean_vertex_distance,mean_vertex_distance_relative,max_vertex_distance,"
+        "max_vertex_distance_relative,seconds\n"
+        "\"a.ply\",0.5,0.05,0.1,0.01,0.2,0.02,3.25,0.01,-0.02,1,yes,yes,,0.875,40,7.5,45,2,0.125,0.0125,1,0.1,1.5\n"
+        "\"b \"\"<x>\"\".obj\",0.5,0.05,0.1,0.01,0.2,0.02,3.25,0.01,-0.02,1,no,yes,7,0.875,40,,,,,,,,1.5\n");
     const std::string md = to_markdown(r);
     EXPECT_NE(md.find("the face-by-face angle is the unweighted mean over triangles"), std::string::npos) << md;
     EXPECT_EQ(to_markdown(small_report()).find("face-by-face"), std::string::npos);
@@ -137,7 +140,8 @@ TEST(CompareReport, CorrespondenceColumns) {
     p.meshes.resize(3);
     const std::string h = to_html(r, p);
     EXPECT_NE(h.find("<th>crease kept</th><th>face-by-face angle &deg;</th>"), std::string::npos) << h;
-    EXPECT_NE(h.find("<td>87.5%</td><td>7.50</td><td>0.125</td><td>1.250e-02</td><td>1</td></tr>"), std::string::npos) << h;
+    EXPECT_NE(h.find("<td>87.5%</td><td>7.50</td><td>0.125</td><td>1.250e-02</td><td>1</td></tr>"), std::string::npos)
+        << h;
     EXPECT_EQ(to_html(small_report(), p).find("face-by-face"), std::string::npos);
 }
 
@@ -147,8 +151,8 @@ TEST(CompareReport, HtmlHasTheTableAndThePictures) {
     p.views = {"front", "side"};
     for (int i = 0; i < 3; ++i) {
         const std::string m = "pictures/mesh" + std::to_string(i);
-        p.meshes.push_back({{m + "_front.png", m + "_side.png"}, {m + "_front_distance.png", m + "_side_distance.png"},
-                            0.25 * i});
+        p.meshes.push_back(
+            {{m + "_front.png", m + "_side.png"}, {m + "_front_distance.png", m + "_side_distance.png"}, 0.25 * i});
     }
     p.legend = "pictures/legend.png";
     p.distance_max = 0.5;
@@ -156,9 +160,10 @@ TEST(CompareReport, HtmlHasTheTableAndThePictures) {
     EXPECT_EQ(h.rfind("<!DOCTYPE html>\n", 0), 0u);
     EXPECT_EQ(h.substr(h.size() - 16), "</body>\n</html>\n");
     EXPECT_NE(h.find("<p>Reference: <code>ref.ply</code></p>"), std::string::npos);
-    EXPECT_NE(h.find("<tr><td>a.ply</td><td>0.5</td><td>5.000e-02</td><td>0.1</td><td>0.2</td><td>3.25</td>"
-                     "<td>+1.000%</td><td>-2.000%</td><td>1</td><td>yes</td><td>yes</td><td>-</td><td>87.5%</td></tr>\n"),
-              std::string::npos)
+    EXPECT_NE(
+        h.find("<tr><td>a.ply</td><td>0.5</td><td>5.000e-02</td><td>0.1</td><td>0.2</td><td>3.25</td>"
+               "<td>+1.000%</td><td>-2.000%</td><td>1</td><td>yes</td><td>yes</td><td>-</td><td>87.5%</td></tr>\n"),
+        std::string::npos)
         << h;
     // Names are escaped, in the table and in the grids.
     EXPECT_NE(h.find("<tr><td>b &quot;&lt;x&gt;&quot;.obj</td>"), std::string::npos) << h;

@@ -84,12 +84,12 @@ TEST(FastEngine, SuperStepsFollowTheExplicitRefitForAFractionOfItsWork) {
     const BoxNormalError ee = box_normal_error(extract_surface(expl), c, e, 2.5);
     const BoxNormalError er = box_normal_error(extract_surface(rkl), c, e, 2.5);
     const BoxNormalError e0 = box_normal_error(extract_surface(v0), c, e, 2.5);
-    std::printf("refit: explicit %d evaluations, super steps %d; |Δφ| mean %.4f max %.4f voxel; normal error "
-                "(deg) near edges / on faces: noisy %.2f / %.2f, explicit %.2f / %.2f, super steps %.2f / %.2f\n",
-                ne, nr, d.mean, d.max, e0.near_edges, e0.on_faces, ee.near_edges, ee.on_faces, er.near_edges,
-                er.on_faces);
-    EXPECT_LT(nr * 3, ne);        // a third of the work at most
-    EXPECT_LT(d.mean, 0.02);      // the same surface (up to a few samples at the edges)...
+    std::printf(
+        "refit: explicit %d evaluations, super steps %d; |Δφ| mean %.4f max %.4f voxel; normal error "
+        "(deg) near edges / on faces: noisy %.2f / %.2f, explicit %.2f / %.2f, super steps %.2f / %.2f\n",
+        ne, nr, d.mean, d.max, e0.near_edges, e0.on_faces, ee.near_edges, ee.on_faces, er.near_edges, er.on_faces);
+    EXPECT_LT(nr * 3, ne);    // a third of the work at most
+    EXPECT_LT(d.mean, 0.02);  // the same surface (up to a few samples at the edges)...
     EXPECT_LT(d.max, 0.5);
     EXPECT_LT(std::abs(er.on_faces - ee.on_faces), 0.25);  // ...and the same quality
     EXPECT_LT(std::abs(er.near_edges - ee.near_edges), 0.5);
@@ -112,8 +112,8 @@ TEST(FastEngine, SuperStepsKeepASphere) {
         r[k] = test::equivalent_radius(v);
         dev[k] = test::radial_stats(v, c).max_deviation;
     }
-    std::printf("sphere r %.4f: explicit refit r %.4f, max radial deviation %.4f; super steps r %.4f, %.4f\n", r0,
-                r[0], dev[0], r[1], dev[1]);
+    std::printf("sphere r %.4f: explicit refit r %.4f, max radial deviation %.4f; super steps r %.4f, %.4f\n", r0, r[0],
+                dev[0], r[1], dev[1]);
     EXPECT_LT(std::abs(r[1] - r0), 0.05);
     EXPECT_LT(std::abs(r[1] - r[0]), 0.01);
     EXPECT_LT(dev[1], dev[0] + 0.05);
@@ -132,9 +132,10 @@ TEST(FastEngine, NearestSampleExtensionMatchesTheGather) {
     const PhiDifference d = phi_difference(gather, nearest);
     const BoxNormalError eg = box_normal_error(extract_surface(gather), c, e, 2.5);
     const BoxNormalError en = box_normal_error(extract_surface(nearest), c, e, 2.5);
-    std::printf("extension: |Δφ| mean %.4f max %.4f voxel; normal error near edges / on faces: gather %.2f / %.2f, "
-                "nearest %.2f / %.2f\n",
-                d.mean, d.max, eg.near_edges, eg.on_faces, en.near_edges, en.on_faces);
+    std::printf(
+        "extension: |Δφ| mean %.4f max %.4f voxel; normal error near edges / on faces: gather %.2f / %.2f, "
+        "nearest %.2f / %.2f\n",
+        d.mean, d.max, eg.near_edges, eg.on_faces, en.near_edges, en.on_faces);
     EXPECT_LT(d.mean, 0.03);
     EXPECT_LT(std::abs(en.on_faces - eg.on_faces), 0.25);
     EXPECT_LT(std::abs(en.near_edges - eg.near_edges), 0.5);
@@ -157,9 +158,10 @@ TEST(FastEngine, ThinnedSamplesOfAFineGridGiveTheSameSurface) {
     const PhiDifference d = phi_difference(all, thin);
     const BoxNormalError ea = box_normal_error(extract_surface(all), c, e, 2.5);
     const BoxNormalError et = box_normal_error(extract_surface(thin), c, e, 2.5);
-    std::printf("thinned samples: %zu of %zu; |Δφ| mean %.4f max %.4f voxel; normal error near edges / on faces: "
-                "all %.2f / %.2f, thinned %.2f / %.2f\n",
-                nt, na, d.mean, d.max, ea.near_edges, ea.on_faces, et.near_edges, et.on_faces);
+    std::printf(
+        "thinned samples: %zu of %zu; |Δφ| mean %.4f max %.4f voxel; normal error near edges / on faces: "
+        "all %.2f / %.2f, thinned %.2f / %.2f\n",
+        nt, na, d.mean, d.max, ea.near_edges, ea.on_faces, et.near_edges, et.on_faces);
     EXPECT_GT(nt * 6, na);  // about a quarter (the shell is twice as thick, a quarter of its columns)
     EXPECT_LT(nt * 3, na);
     EXPECT_LT(d.mean, 0.06);  // voxels of h/2

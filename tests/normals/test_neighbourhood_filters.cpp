@@ -22,8 +22,8 @@ namespace {
 using test::add_noise;
 using test::box_normal_error;
 using test::box_sdf;
-using test::bumpy_box;
 using test::BoxNormalError;
+using test::bumpy_box;
 using test::equivalent_radius;
 using test::make_volume;
 using test::sphere_sdf;
@@ -77,10 +77,11 @@ TEST(NeighbourhoodFilters, NoisyCubeComesOutWithFlatFacesAndSharpEdges) {
     smooth_volume(bil, options(SmoothMode::Bilateral));
     const BoxNormalError ei = box_normal_error(extract_surface(iso), c, e, 2.5);
     const BoxNormalError eb = box_normal_error(extract_surface(bil), c, e, 2.5);
-    std::printf("cube normal error (deg) near edges / on faces: clean %.2f / %.2f, noisy %.2f / %.2f, isotropic "
-                "%.2f / %.2f, bilateral %.2f / %.2f\n",
-                floor.near_edges, floor.on_faces, e0.near_edges, e0.on_faces, ei.near_edges, ei.on_faces,
-                eb.near_edges, eb.on_faces);
+    std::printf(
+        "cube normal error (deg) near edges / on faces: clean %.2f / %.2f, noisy %.2f / %.2f, isotropic "
+        "%.2f / %.2f, bilateral %.2f / %.2f\n",
+        floor.near_edges, floor.on_faces, e0.near_edges, e0.on_faces, ei.near_edges, ei.on_faces, eb.near_edges,
+        eb.on_faces);
     EXPECT_LT(eb.on_faces, 0.25 * e0.on_faces);     // the faces are flat
     EXPECT_LT(eb.on_faces, 0.5 * ei.on_faces);      // flatter than isotropic diffusion makes them
     EXPECT_LT(eb.near_edges, 0.5 * ei.near_edges);  // the edges are not rounded
@@ -102,10 +103,10 @@ TEST(NeighbourhoodFilters, CleanBoxIsHarmedLessThanByTheDiffusions) {
         Volume v = v0;
         smooth_volume(v, options(mode));
         const BoxNormalError r = box_normal_error(extract_surface(v), c, e, 2.5);
-        std::printf("clean box, %s: normal error (deg) near edges / on faces %.3f / %.3f (unsmoothed %.3f / %.3f, "
-                    "anisotropic %.3f / %.3f)\n",
-                    to_string(mode), r.near_edges, r.on_faces, floor.near_edges, floor.on_faces, ea.near_edges,
-                    ea.on_faces);
+        std::printf(
+            "clean box, %s: normal error (deg) near edges / on faces %.3f / %.3f (unsmoothed %.3f / %.3f, "
+            "anisotropic %.3f / %.3f)\n",
+            to_string(mode), r.near_edges, r.on_faces, floor.near_edges, floor.on_faces, ea.near_edges, ea.on_faces);
         EXPECT_LT(r.near_edges, 0.75 * ea.near_edges) << to_string(mode);
         EXPECT_LT(r.on_faces, 3.0) << to_string(mode);
     }
@@ -128,7 +129,7 @@ TEST(NeighbourhoodFilters, FinerGridIsNoWorse) {
                     err[k].near_edges, err[k].on_faces);
     }
     const BoxNormalError bumpy = box_normal_error(extract_surface(make_volume(40, 1.0, sdf)), c, e, 2.5);
-    EXPECT_LT(err[0].on_faces, 0.5 * bumpy.on_faces);  // the coarse grid removed the bumps...
+    EXPECT_LT(err[0].on_faces, 0.5 * bumpy.on_faces);    // the coarse grid removed the bumps...
     EXPECT_LE(err[1].on_faces, err[0].on_faces + 0.25);  // ...and the fine grid too
     EXPECT_LE(err[1].near_edges, err[0].near_edges + 0.25);
 }

@@ -31,8 +31,8 @@ namespace {
 using test::add_noise;
 using test::add_smooth_noise;
 using test::box_normal_error;
-using test::BoxNormalError;
 using test::box_sdf;
+using test::BoxNormalError;
 using test::equivalent_radius;
 using test::make_volume;
 using test::radial_stats;
@@ -57,7 +57,6 @@ std::vector<float> mus(const SmoothReport& r) {
     for (const SmoothIteration& it : r.iterations) m.push_back(it.mu);
     return m;
 }
-
 
 // ------------------------------------------------------------------------------------------------
 // Known answers
@@ -99,7 +98,8 @@ TEST(SmoothVolume, HandsOutItsLastNormalMapUnitAndRadialOnASphere) {
                     ++defined;
                     const Vec3d n(map[0].value(i, j, k), map[1].value(i, j, k), map[2].value(i, j, k));
                     EXPECT_NEAR(norm(n), 1.0, 1e-3);
-                    if (near) worst = std::max(worst, std::acos(std::min(1.0, dot(n, (p - c) / norm(p - c)))) * 57.29578);
+                    if (near)
+                        worst = std::max(worst, std::acos(std::min(1.0, dot(n, (p - c) / norm(p - c)))) * 57.29578);
                 }
         EXPECT_GE(defined, near_surface);  // every sample within a voxel of the surface, and more
         EXPECT_LT(worst, 5.0);             // outward and radial (the worst sample; 3.4° measured)
@@ -212,9 +212,10 @@ TEST(SmoothVolume, AnisotropicKeepsNoisyCubeEdgesWhereIsotropicRoundsThem) {
     smooth_volume(aniso, options(SmoothMode::Anisotropic, 3));
     const BoxNormalError ei = box_normal_error(extract_surface(iso), c, e, 2.5);
     const BoxNormalError ea = box_normal_error(extract_surface(aniso), c, e, 2.5);
-    std::printf("cube normal error (deg) near edges / on faces: noisy %.2f / %.2f, isotropic %.2f / %.2f, "
-                "anisotropic %.2f / %.2f\n",
-                err0.near_edges, err0.on_faces, ei.near_edges, ei.on_faces, ea.near_edges, ea.on_faces);
+    std::printf(
+        "cube normal error (deg) near edges / on faces: noisy %.2f / %.2f, isotropic %.2f / %.2f, "
+        "anisotropic %.2f / %.2f\n",
+        err0.near_edges, err0.on_faces, ei.near_edges, ei.on_faces, ea.near_edges, ea.on_faces);
     // both remove the noise on the flat parts
     EXPECT_LT(ei.on_faces, 0.5 * err0.on_faces);
     EXPECT_LT(ea.on_faces, 0.5 * err0.on_faces);
@@ -244,17 +245,18 @@ TEST(SmoothVolume, RobustConductanceScaleRemovesHeavyNoiseAndKeepsEdges) {
     const BoxNormalError ef = box_normal_error(extract_surface(fixed), c, e, 2.5);
     const BoxNormalError er = box_normal_error(extract_surface(robust), c, e, 2.5);
     const BoxNormalError ei = box_normal_error(extract_surface(iso), c, e, 2.5);
-    std::printf("heavy noise, cube normal error (deg) near edges / on faces: noisy %.2f / %.2f, fixed mu %.2f / "
-                "%.2f, robust mu %.2f / %.2f, isotropic %.2f / %.2f; robust mu %.3f -> %.3f\n",
-                err0.near_edges, err0.on_faces, ef.near_edges, ef.on_faces, er.near_edges, er.on_faces,
-                ei.near_edges, ei.on_faces, double(mus(rr).front()), double(mus(rr).back()));
+    std::printf(
+        "heavy noise, cube normal error (deg) near edges / on faces: noisy %.2f / %.2f, fixed mu %.2f / "
+        "%.2f, robust mu %.2f / %.2f, isotropic %.2f / %.2f; robust mu %.3f -> %.3f\n",
+        err0.near_edges, err0.on_faces, ef.near_edges, ef.on_faces, er.near_edges, er.on_faces, ei.near_edges,
+        ei.on_faces, double(mus(rr).front()), double(mus(rr).back()));
     const std::vector<float> mf = mus(rf), mr = mus(rr);
     ASSERT_EQ(mf.size(), 3u);
     ASSERT_EQ(mr.size(), 3u);
-    for (const float m : mf) EXPECT_EQ(m, 0.1f);  // fixed: the option's µ
-    EXPECT_GT(mr.front(), 0.2f);                  // the noise raises the scale...
+    for (const float m : mf) EXPECT_EQ(m, 0.1f);                              // fixed: the option's µ
+    EXPECT_GT(mr.front(), 0.2f);                                              // the noise raises the scale...
     for (std::size_t i = 1; i < mr.size(); ++i) EXPECT_LE(mr[i], mr[i - 1]);  // ...and never rises
-    for (const float m : mr) EXPECT_GE(m, 0.1f);  // never below the option's µ
+    for (const float m : mr) EXPECT_GE(m, 0.1f);                              // never below the option's µ
     EXPECT_LT(er.on_faces, 0.7 * ef.on_faces);
     EXPECT_LT(er.near_edges, ef.near_edges);
     EXPECT_LT(er.near_edges, ei.near_edges);
@@ -269,8 +271,8 @@ TEST(SmoothVolume, RobustConductanceScaleLeavesACleanBoxAlone) {
         int n;
         Vec3d c, e;
     };
-    for (const Box& box : {Box{48, Vec3d(24.4, 23.7, 24.2), Vec3d(13, 13, 13)},
-                           Box{40, Vec3d(20.3, 19.6, 20.2), Vec3d(11, 9, 10)}}) {
+    for (const Box& box :
+         {Box{48, Vec3d(24.4, 23.7, 24.2), Vec3d(13, 13, 13)}, Box{40, Vec3d(20.3, 19.6, 20.2), Vec3d(11, 9, 10)}}) {
         const Volume v0 = make_volume(box.n, 1.0, box_sdf(box.c, box.e));
         Volume a = v0, b = v0;
         SmoothOptions o = options(SmoothMode::Anisotropic, 3);
@@ -279,10 +281,11 @@ TEST(SmoothVolume, RobustConductanceScaleLeavesACleanBoxAlone) {
         smooth_volume(a, o);
         const BoxNormalError ef = box_normal_error(extract_surface(a), box.c, box.e, 2.5);
         const BoxNormalError er = box_normal_error(extract_surface(b), box.c, box.e, 2.5);
-        std::printf("clean box %d: normal error (deg) near edges / on faces: fixed mu %.3f / %.3f, robust mu %.3f / "
-                    "%.3f; robust mu %.3f -> %.3f\n",
-                    box.n, ef.near_edges, ef.on_faces, er.near_edges, er.on_faces, double(mus(r).front()),
-                    double(mus(r).back()));
+        std::printf(
+            "clean box %d: normal error (deg) near edges / on faces: fixed mu %.3f / %.3f, robust mu %.3f / "
+            "%.3f; robust mu %.3f -> %.3f\n",
+            box.n, ef.near_edges, ef.on_faces, er.near_edges, er.on_faces, double(mus(r).front()),
+            double(mus(r).back()));
         for (const float m : mus(r)) EXPECT_EQ(m, 0.1f) << box.n;
         ASSERT_EQ(a.values.size(), b.values.size());
         EXPECT_EQ(0, std::memcmp(a.values.data(), b.values.data(), a.values.size() * sizeof(float))) << box.n;
@@ -346,7 +349,7 @@ Mesh rotated_box(const Vec3d& lo, const Vec3d& hi, int n, bool alternate, double
         return ctr + d * cs + cross(ax, d) * sn + ax * (dot(ax, d) * (1 - cs));
     };
     for (int f = 0; f < 6; ++f) {
-        const int a = f / 2;            // normal axis
+        const int a = f / 2;  // normal axis
         const bool pos = f % 2 == 1;
         const int u = (a + 1) % 3, w = (a + 2) % 3;
         const std::uint32_t base = std::uint32_t(m.positions.size());
@@ -566,9 +569,9 @@ double eikonal_residual(const Volume& v, std::size_t* checked) {
                 bool interface = false;
                 for (const float o : nb) interface |= (o < 0.0f) != (p < 0.0f);
                 if (interface) continue;
-                const double u = godunov(std::min(std::abs(nb[0]), std::abs(nb[1])),
-                                         std::min(std::abs(nb[2]), std::abs(nb[3])),
-                                         std::min(std::abs(nb[4]), std::abs(nb[5])));
+                const double u =
+                    godunov(std::min(std::abs(nb[0]), std::abs(nb[1])), std::min(std::abs(nb[2]), std::abs(nb[3])),
+                            std::min(std::abs(nb[4]), std::abs(nb[5])));
                 worst = std::max(worst, std::abs(double(std::abs(p)) - std::min(u, 8.0)));
                 *checked += std::abs(p) < 7.5f;
             }

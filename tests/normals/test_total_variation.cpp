@@ -62,7 +62,8 @@ BoxFaces box_faces(const Mesh& m, const Vec3d& c, const Vec3d& e, double reach) 
         area[std::size_t(f)] += a;
     }
     BoxFaces out;
-    for (int f = 0; f < 6; ++f) out.mean[std::size_t(f)] = sum[std::size_t(f)] / std::max(norm(sum[std::size_t(f)]), 1e-30);
+    for (int f = 0; f < 6; ++f)
+        out.mean[std::size_t(f)] = sum[std::size_t(f)] / std::max(norm(sum[std::size_t(f)]), 1e-30);
     std::array<double, 6> ang{};
     for (const auto& t : m.triangles) {
         Vec3d n;
@@ -71,7 +72,8 @@ BoxFaces box_faces(const Mesh& m, const Vec3d& c, const Vec3d& e, double reach) 
         if (f < 0) continue;
         ang[std::size_t(f)] += a * std::acos(std::clamp(dot(n, out.mean[std::size_t(f)]), -1.0, 1.0)) * kDeg;
     }
-    for (int f = 0; f < 6; ++f) out.spread[std::size_t(f)] = area[std::size_t(f)] > 0 ? ang[std::size_t(f)] / area[std::size_t(f)] : 180.0;
+    for (int f = 0; f < 6; ++f)
+        out.spread[std::size_t(f)] = area[std::size_t(f)] > 0 ? ang[std::size_t(f)] / area[std::size_t(f)] : 180.0;
     return out;
 }
 
@@ -83,7 +85,8 @@ double worst_right_angle(const BoxFaces& b) {
     for (int f = 0; f < 6; ++f)
         for (int g = 0; g < 6; ++g)
             if (f / 2 != g / 2) {
-                const double a = std::acos(std::clamp(dot(b.mean[std::size_t(f)], b.mean[std::size_t(g)]), -1.0, 1.0)) * kDeg;
+                const double a =
+                    std::acos(std::clamp(dot(b.mean[std::size_t(f)], b.mean[std::size_t(g)]), -1.0, 1.0)) * kDeg;
                 worst = std::max(worst, std::abs(a - 90.0));
             }
     return worst;
@@ -108,10 +111,11 @@ TEST(TotalVariation, NoisyCubeComesOutWithPlanarFacesAtRightAngles) {
     const BoxFaces f0 = box_faces(extract_surface(noisy), c, e, 2.5);
     const BoxFaces fi = box_faces(extract_surface(iso), c, e, 2.5);
     const BoxFaces ft = box_faces(extract_surface(flat), c, e, 2.5);
-    std::printf("cube face spread (deg, worst face): noisy %.2f, isotropic %.2f, tv %.2f; worst |dihedral - 90| "
-                "noisy %.2f, isotropic %.2f, tv %.2f\n",
-                max_spread(f0), max_spread(fi), max_spread(ft), worst_right_angle(f0), worst_right_angle(fi),
-                worst_right_angle(ft));
+    std::printf(
+        "cube face spread (deg, worst face): noisy %.2f, isotropic %.2f, tv %.2f; worst |dihedral - 90| "
+        "noisy %.2f, isotropic %.2f, tv %.2f\n",
+        max_spread(f0), max_spread(fi), max_spread(ft), worst_right_angle(f0), worst_right_angle(fi),
+        worst_right_angle(ft));
     EXPECT_LT(max_spread(ft), 0.35 * max_spread(fi));  // planar: a small fraction of isotropic's spread
     EXPECT_LT(max_spread(ft), 0.2 * max_spread(f0));
     EXPECT_LT(worst_right_angle(ft), 1.5);  // the faces meet at 90°

@@ -38,8 +38,7 @@ inline Volume make_volume(int n, double h, const Sdf& sdf, float half_width = 3.
                 for (int z = 0; z < kBlockDim; ++z)
                     for (int y = 0; y < kBlockDim; ++y)
                         for (int x = 0; x < kBlockDim; ++x) {
-                            const Vec3d w = g.world(
-                                Vec3d(bi * kBlockDim + x, bj * kBlockDim + y, bk * kBlockDim + z));
+                            const Vec3d w = g.world(Vec3d(bi * kBlockDim + x, bj * kBlockDim + y, bk * kBlockDim + z));
                             vals[Volume::local_index(x, y, z)] =
                                 float(std::clamp(sdf(w), -double(v.background), double(v.background)));
                         }
@@ -90,8 +89,9 @@ inline void add_noise(Volume& v, double amplitude, std::uint32_t seed) {
         for (int z = 0; z < kBlockDim; ++z)
             for (int y = 0; y < kBlockDim; ++y)
                 for (int x = 0; x < kBlockDim; ++x)
-                    vals[Volume::local_index(x, y, z)] += float(
-                        amplitude * hash_noise(bc[0] * kBlockDim + x, bc[1] * kBlockDim + y, bc[2] * kBlockDim + z, seed));
+                    vals[Volume::local_index(x, y, z)] +=
+                        float(amplitude *
+                              hash_noise(bc[0] * kBlockDim + x, bc[1] * kBlockDim + y, bc[2] * kBlockDim + z, seed));
     }
 }
 
@@ -127,8 +127,7 @@ inline double inside_volume(const Volume& v) {
     const double inv_h = 1.0 / v.grid.voxel_size;
     for (int k = 0; k < v.grid.dims[2]; ++k)
         for (int j = 0; j < v.grid.dims[1]; ++j)
-            for (int i = 0; i < v.grid.dims[0]; ++i)
-                vol += std::clamp(0.5 - v.value(i, j, k) * inv_h, 0.0, 1.0);
+            for (int i = 0; i < v.grid.dims[0]; ++i) vol += std::clamp(0.5 - v.value(i, j, k) * inv_h, 0.0, 1.0);
     return vol;
 }
 

@@ -10,11 +10,10 @@
 #include <fstream>
 #include <iterator>
 #include <map>
-#include <tuple>
 #include <string>
+#include <tuple>
 
 #include "../sdf/sdf_test_meshes.h"
-#include "support/attributed_mesh.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "extract/extract_surface.h"
@@ -25,6 +24,7 @@
 #include "io/io.h"
 #include "io/tetgen/tetmesh.h"
 #include "sdf/scan_convert.h"
+#include "support/attributed_mesh.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -138,8 +138,9 @@ TEST(Draco, DecoderReadsEveryDrcWeWrite) {
 TEST(Gltf, ValidatorReportsNoErrorOnEveryGlb) {
     const fs::path modules = fs::path(NORMALFLOW_BINARY_DIR) / "tools" / "node_modules";
     if (sh("command -v node") != 0 || !fs::exists(modules / "gltf-validator"))
-        GTEST_SKIP() << "node or gltf-validator missing: scripts/test installs it (npm ci of tests/browser/package.json "
-                        "in " NORMALFLOW_BINARY_DIR "/tools)";
+        GTEST_SKIP()
+            << "node or gltf-validator missing: scripts/test installs it (npm ci of tests/browser/package.json "
+               "in " NORMALFLOW_BINARY_DIR "/tools)";
     // every writer, without and with normals, colours and texture coordinates
     const Mesh m = icosphere(1.0, 3);
     const Mesh rich = normalflow::test::attributed_sphere(3);
@@ -188,7 +189,8 @@ TEST(Tetmesh, RefusesOpenAndSelfIntersectingSurfaces) {
     Mesh open = icosphere(1.0, 2);
     open.triangles.pop_back();
     EXPECT_THROW(tetrahedralize(open), InvalidInput);
-    const Mesh two = test::concat(test::box_mesh({0, 0, 0}, {1, 1, 1}), test::box_mesh({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}));
+    const Mesh two =
+        test::concat(test::box_mesh({0, 0, 0}, {1, 1, 1}), test::box_mesh({0.5, 0.5, 0.5}, {1.5, 1.5, 1.5}));
     EXPECT_THROW(tetrahedralize(two), InvalidInput);
     EXPECT_THROW(tetrahedralize(Mesh{}), InvalidInput);
 }
@@ -196,7 +198,8 @@ TEST(Tetmesh, RefusesOpenAndSelfIntersectingSurfaces) {
 TEST(Tetmesh, MeshioReadsVtuAndMesh) {
     // Debian's python3-meshio lives in the system python (a pyenv python3 first on PATH lacks it).
     const std::string py = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-    if (sh(py + " -c 'import meshio'") != 0) GTEST_SKIP() << "python3 cannot import meshio (apt-get install python3-meshio)";
+    if (sh(py + " -c 'import meshio'") != 0)
+        GTEST_SKIP() << "python3 cannot import meshio (apt-get install python3-meshio)";
     const TetMesh t = tetrahedralize(icosphere(1.0, 2));
     const auto vtu = tmp_dir() / "t.vtu", me = tmp_dir() / "t.mesh", nd = tmp_dir() / "t.node";
     write_tetmesh(vtu.string(), t);
@@ -204,10 +207,10 @@ TEST(Tetmesh, MeshioReadsVtuAndMesh) {
     write_tetmesh(nd.string(), t);
     EXPECT_TRUE(fs::exists(tmp_dir() / "t.ele"));
     for (const auto& p : {vtu, me}) {
-        const std::string cmd = py + " -c \"import meshio,sys; m=meshio.read('" + p.string() +
-                                "'); c=m.cells_dict['tetra']; sys.exit(0 if len(m.points)==" +
-                                std::to_string(t.points.size()) + " and len(c)==" + std::to_string(t.tets.size()) +
-                                " else 1)\"";
+        const std::string cmd =
+            py + " -c \"import meshio,sys; m=meshio.read('" + p.string() +
+            "'); c=m.cells_dict['tetra']; sys.exit(0 if len(m.points)==" + std::to_string(t.points.size()) +
+            " and len(c)==" + std::to_string(t.tets.size()) + " else 1)\"";
         EXPECT_EQ(sh(cmd), 0) << p;
     }
     EXPECT_THROW(write_tetmesh((tmp_dir() / "t.xyz").string(), t), InvalidInput);
@@ -262,8 +265,8 @@ double mean_edge(const Mesh& m) {
         for (int k = 0; k < 3; ++k) {
             const auto& a = m.positions[t[k]];
             const auto& b = m.positions[t[(k + 1) % 3]];
-            s += std::sqrt(double((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                                  (a[2] - b[2]) * (a[2] - b[2])));
+            s += std::sqrt(
+                double((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2])));
         }
     return s / (3.0 * double(m.triangles.size()));  // every edge of a closed mesh counted twice
 }

@@ -430,7 +430,7 @@ TEST(TangentPlanes, ErrorBoundAdaptsTheSphereAndKeepsItAccurate) {
 
 TEST(TangentPlanes, BadOptionsThrow) {
     Mesh m = test::icosphere(1.0, 2);
-    EXPECT_THROW(decimate_mesh_qem(m, {.target_faces = 0}), InvalidInput);                  // no stop at all
+    EXPECT_THROW(decimate_mesh_qem(m, {.target_faces = 0}), InvalidInput);  // no stop at all
     EXPECT_THROW(decimate_mesh_qem(m, {.max_error = -1.0}), InvalidInput);
     EXPECT_THROW(decimate_mesh_qem(m, {.max_error = 0.1, .tangent_planes = true}), InvalidInput);  // no normals
     EXPECT_THROW(decimate_mesh(m, {.max_error = 0.1, .decimator = Decimator::Meshoptimizer}), InvalidInput);

@@ -167,7 +167,8 @@ TEST(Pipeline, AutomaticResolutionFollowsTheLengthScaleAndTheMemory) {
     o.scan.resolution = 0;
     const double ell = model_length_scale(sphere);
     ASSERT_GT(ell, 0.0);
-    const int expected = std::clamp(int(std::ceil(kAutoVoxelsPerLength * 2.0 / ell)), kAutoResolutionMin, kAutoResolutionMax);
+    const int expected =
+        std::clamp(int(std::ceil(kAutoVoxelsPerLength * 2.0 / ell)), kAutoResolutionMin, kAutoResolutionMax);
     EXPECT_EQ(auto_resolution(sphere, o), expected);
     o.length_scale = 0.025;  // 5 voxels per 0.025 along 2: 400
     EXPECT_EQ(auto_resolution(sphere, o), 400);
@@ -266,7 +267,7 @@ TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
     EXPECT_EQ(kept.mesh.triangles, open.triangles);  // the same faces, in the same order
     ASSERT_EQ(kept.mesh.positions.size(), open.positions.size());
     const MeshReport after = mesh_report(kept.mesh);
-    EXPECT_EQ(after.boundary_edges, before.boundary_edges);  // open in, open out
+    EXPECT_EQ(after.boundary_edges, before.boundary_edges);               // open in, open out
     EXPECT_EQ(kept.report.fit.boundary_vertices, before.boundary_edges);  // one loop: as many vertices as edges
     // the vertices moved (onto the processed surface) but not far
     double moved = 0, worst = 0;
@@ -457,9 +458,9 @@ TEST(Pipeline, ReportJsonHasEveryStage) {
     o.smooth.mode = SmoothMode::Anisotropic;  // µ is reported by the anisotropic filter
     const PipelineReport rep = smooth_mesh(test::icosphere(1.0, 2), o).report;
     const std::string j = to_json(rep).dump();
-    for (const char* key : {"\"voxelize\"", "\"band_half_width\"", "\"smooth\"", "\"stopped_unchanged\"", "\"mu\"",
-                            "\"length_scale\"", "\"volume_shift\"",
-                            "\"extract\"", "\"seconds\"", "\"total\"", "\"warnings\"", "\"distance\":\"bvh\""})
+    for (const char* key :
+         {"\"voxelize\"", "\"band_half_width\"", "\"smooth\"", "\"stopped_unchanged\"", "\"mu\"", "\"length_scale\"",
+          "\"volume_shift\"", "\"extract\"", "\"seconds\"", "\"total\"", "\"warnings\"", "\"distance\":\"bvh\""})
         EXPECT_NE(j.find(key), std::string::npos) << key << " missing from " << j.substr(0, 300);
 }
 
@@ -498,7 +499,8 @@ TEST(Pipeline, CliTexturedInputKeepsItsAttributesThroughSmoothAndCompress) {
     ASSERT_TRUE(smoothed.has_normals());
     const std::string info = cli + " info " + out + " --json > " + (dir / "info.json");
     ASSERT_EQ(std::system(info.c_str()), 0) << info;
-    EXPECT_NE(test::slurp(dir / "info.json").find(R"("attributes":["normals","colors","texcoords"])"), std::string::npos)
+    EXPECT_NE(test::slurp(dir / "info.json").find(R"("attributes":["normals","colors","texcoords"])"),
+              std::string::npos)
         << test::slurp(dir / "info.json");
     for (const std::string ext : {".glb", ".drc"}) {
         SCOPED_TRACE(ext);

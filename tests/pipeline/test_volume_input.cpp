@@ -16,11 +16,11 @@
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "extract/extract_surface.h"
+#include "extract/volume_sampler.h"
 #include "io/formats/nifti.h"
 #include "io/io.h"
 #include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
-#include "extract/volume_sampler.h"
 #include "sdf/image_to_volume.h"
 #include "sdf/sdf_test_meshes.h"
 #include "support/test_files.h"
@@ -59,10 +59,12 @@ void write_label_nhdr(const std::string& nhdr, const ScalarImage& im) {
         h << buf;
     }
     std::snprintf(buf, sizeof buf, "\nspace origin: (%.17g,%.17g,%.17g)\n", im.origin.x, im.origin.y, im.origin.z);
-    h << buf << "kinds: domain domain domain\nencoding: raw\ndata file: "
-      << std::filesystem::path(raw).filename().string() << "\n";
+    h << buf
+      << "kinds: domain domain domain\nencoding: raw\ndata file: " << std::filesystem::path(raw).filename().string()
+      << "\n";
     std::vector<std::uint8_t> bytes(im.values.begin(), im.values.end());
-    std::ofstream(raw, std::ios::binary).write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    std::ofstream(raw, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
 }
 
 /// The image's value at a world position: trilinear in the image's own index space.
@@ -102,7 +104,8 @@ TEST(VolumeInput, MriWhiteMatterIsSmoothedWhereTheVolumeSays) {
     raw.smoothing = false;
     const Mesh iso = volume_to_mesh(v, raw);
     std::vector<double> off;
-    for (std::size_t i = 0; i < iso.positions.size(); i += 37) off.push_back(std::abs(image_value(im, to_d(iso.positions[i])) - 0.5));
+    for (std::size_t i = 0; i < iso.positions.size(); i += 37)
+        off.push_back(std::abs(image_value(im, to_d(iso.positions[i])) - 0.5));
     EXPECT_LT(percentile(off, 0.5), 0.05);
     EXPECT_LT(percentile(off, 0.9), 0.15);
     // Smoothed with the defaults: closed, manifold, near the isosurface, and smoother than it.
@@ -110,7 +113,7 @@ TEST(VolumeInput, MriWhiteMatterIsSmoothedWhereTheVolumeSays) {
     const MeshReport rep = mesh_report(r.mesh);
     EXPECT_TRUE(rep.closed && rep.manifold);
     const SurfaceDistance d = surface_distance(r.mesh, iso);
-    EXPECT_LT(d.mean, 1.0);  // mm: within a voxel on average
+    EXPECT_LT(d.mean, 1.0);                   // mm: within a voxel on average
     EXPECT_GT(d.mean_normal_angle_deg, 2.0);  // it did change the normals
 }
 
@@ -147,9 +150,12 @@ TEST(VolumeInput, LabelMapOfARealSurfaceRoundTripsWithItsPlacement) {
     for (int z = 0; z < im.dims[2]; ++z)
         for (int y = 0; y < im.dims[1]; ++y)
             for (int x = 0; x < im.dims[0]; ++x)
-                im.values[std::size_t(x) + std::size_t(im.dims[0]) * (std::size_t(y) + std::size_t(im.dims[1]) * std::size_t(z))] =
-                    phi.phi(im.origin + im.axes[0] * double(x) + im.axes[1] * double(y) + im.axes[2] * double(z), nullptr) < 0
-                        ? 1.0f : 0.0f;
+                im.values[std::size_t(x) +
+                          std::size_t(im.dims[0]) * (std::size_t(y) + std::size_t(im.dims[1]) * std::size_t(z))] =
+                    phi.phi(im.origin + im.axes[0] * double(x) + im.axes[1] * double(y) + im.axes[2] * double(z),
+                            nullptr) < 0
+                        ? 1.0f
+                        : 0.0f;
     test::TempDir dir;
     const std::string nhdr = dir / "label.nhdr";
     write_label_nhdr(nhdr, im);
@@ -229,22 +235,26 @@ TEST(VolumeInput, CliVolumesInAndOutAgreeWithTheMeshPath) {
 #ifdef NORMALFLOW_TEST_HAS_OPENVDB
     // OpenVDB's own Python module (Debian python3-openvdb) reads the smoothed volume as a level set: inside
     // at the ball's centre, zero within a voxel on its surface (radius 1), outside beyond it.
-    const std::string py = "/usr/bin/python3 -c \"import pyopenvdb as vdb, sys; g = vdb.read(sys.argv[1], 'surface'); "
-                           "assert g.gridClass == vdb.GridClass.LEVEL_SET, g.gridClass; "
-                           "h = g.transform.voxelSize()[0]; a = g.getConstAccessor(); "
-                           "v = lambda x: a.getValue(g.transform.worldToIndexCellCentered((0.1 + x, -0.2, 0.05))); "
-                           "assert v(0) < 0 and abs(v(1)) < h and v(1.2) > 0, (v(0), v(1), v(1.2), h)\" ";
+    const std::string py =
+        "/usr/bin/python3 -c \"import pyopenvdb as vdb, sys; g = vdb.read(sys.argv[1], 'surface'); "
+        "assert g.gridClass == vdb.GridClass.LEVEL_SET, g.gridClass; "
+        "h = g.transform.voxelSize()[0]; a = g.getConstAccessor(); "
+        "v = lambda x: a.getValue(g.transform.worldToIndexCellCentered((0.1 + x, -0.2, 0.05))); "
+        "assert v(0) < 0 and abs(v(1)) < h and v(1.2) > 0, (v(0), v(1), v(1.2), h)\" ";
     EXPECT_EQ(run(py + dir / "smoothed.vdb"), 0);
     // --normal-map adds the filtered normal map as a vector grid: unit vectors, outwards on the sphere.
     ASSERT_EQ(run(cli + "smooth " + sphere + " " + dir / "normals.vdb --resolution 48 --normal-map" + common), 0);
-    const std::string pyn = "/usr/bin/python3 -c \"import pyopenvdb as vdb, sys, math; g = vdb.read(sys.argv[1], 'normals'); "
-                            "a = g.getConstAccessor(); t = g.transform; c = (0.1, -0.2, 0.05); n = 0; "
-                            "assert g.activeVoxelCount() > 1000, g.activeVoxelCount()\n"
-                            "for d in [(1, 0, 0), (0, -1, 0), (0, 0, 1), (0.6, 0.8, 0)]:\n"
-                            " v = a.getValue(t.worldToIndexCellCentered(tuple(c[i] + d[i] for i in range(3))))\n"
-                            " assert abs(math.sqrt(sum(x * x for x in v)) - 1) < 1e-3 and sum(v[i] * d[i] for i in range(3)) > 0.99, (d, v)\" ";
+    const std::string pyn =
+        "/usr/bin/python3 -c \"import pyopenvdb as vdb, sys, math; g = vdb.read(sys.argv[1], 'normals'); "
+        "a = g.getConstAccessor(); t = g.transform; c = (0.1, -0.2, 0.05); n = 0; "
+        "assert g.activeVoxelCount() > 1000, g.activeVoxelCount()\n"
+        "for d in [(1, 0, 0), (0, -1, 0), (0, 0, 1), (0.6, 0.8, 0)]:\n"
+        " v = a.getValue(t.worldToIndexCellCentered(tuple(c[i] + d[i] for i in range(3))))\n"
+        " assert abs(math.sqrt(sum(x * x for x in v)) - 1) < 1e-3 and sum(v[i] * d[i] for i in range(3)) > 0.99, (d, "
+        "v)\" ";
     EXPECT_EQ(run(pyn + dir / "normals.vdb"), 0);
-    EXPECT_NE(run(cli + "smooth " + sphere + " " + dir / "normals.nrrd --resolution 48 --normal-map --quiet 2>/dev/null"), 0);
+    EXPECT_NE(
+        run(cli + "smooth " + sphere + " " + dir / "normals.nrrd --resolution 48 --normal-map --quiet 2>/dev/null"), 0);
 #endif
 }
 

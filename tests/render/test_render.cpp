@@ -44,7 +44,8 @@ std::size_t covered(const Image& img, Rgb8 bg = kWhite) {
 int brightness(Rgb8 c) { return int(c.r) + int(c.g) + int(c.b); }
 
 std::uint32_t be32(const std::vector<std::uint8_t>& b, std::size_t at) {
-    return (std::uint32_t(b[at]) << 24) | (std::uint32_t(b[at + 1]) << 16) | (std::uint32_t(b[at + 2]) << 8) | b[at + 3];
+    return (std::uint32_t(b[at]) << 24) | (std::uint32_t(b[at + 1]) << 16) | (std::uint32_t(b[at + 2]) << 8) |
+           b[at + 3];
 }
 
 // Analytic: a unit sphere seen head-on covers a disc of pi r^2 pixels; its centre faces the headlight.
@@ -112,7 +113,8 @@ TEST(RenderMesh, NearerTriangleWinsInEitherOrder) {
     // Two squares facing the camera: z = 0 (scalar 0) and z = 1 (nearer, scalar 1).
     Mesh m;
     for (float z : {0.0f, 1.0f})
-        for (auto [x, y] : {std::pair{-1.f, -1.f}, {1.f, -1.f}, {1.f, 1.f}, {-1.f, 1.f}}) m.positions.push_back({x, y, z});
+        for (auto [x, y] : {std::pair{-1.f, -1.f}, {1.f, -1.f}, {1.f, 1.f}, {-1.f, 1.f}})
+            m.positions.push_back({x, y, z});
     const std::vector<Tri> far{{0, 1, 2}, {0, 2, 3}}, near{{4, 5, 6}, {4, 6, 7}};
     std::vector<float> s{0, 0, 0, 0, 1, 1, 1, 1};
     RenderOptions o;

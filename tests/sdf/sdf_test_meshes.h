@@ -16,11 +16,11 @@ namespace normalflow::test {
 // Icosphere of radius r about c, `levels` loop subdivisions of an icosahedron (20 * 4^levels faces), outward.
 inline Mesh icosphere(double r, int levels, Vec3d c = {}) {
     const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-    std::vector<Vec3d> p = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-    std::vector<Tri> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+    std::vector<Vec3d> p = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                            {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<Tri> f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
                           {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-                          {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+                          {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
     for (auto& q : p) q = normalized(q);
     for (int l = 0; l < levels; ++l) {
         std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
@@ -51,8 +51,8 @@ inline Mesh icosphere(double r, int levels, Vec3d c = {}) {
 inline double sphere_chord_error(const Mesh& m, double r, Vec3d c = {}) {
     double dmin = r;
     for (const Tri& t : m.triangles) {
-        const Vec3d q = closest_point_on_triangle(c, Vec3d(m.positions[t[0]]), Vec3d(m.positions[t[1]]),
-                                                  Vec3d(m.positions[t[2]]));
+        const Vec3d q =
+            closest_point_on_triangle(c, Vec3d(m.positions[t[0]]), Vec3d(m.positions[t[1]]), Vec3d(m.positions[t[2]]));
         dmin = std::min(dmin, norm(q - c));
     }
     return r - dmin;
@@ -82,8 +82,8 @@ inline Mesh torus_mesh(double R, double r, int nu, int nv) {
     for (int i = 0; i < nu; ++i)
         for (int j = 0; j < nv; ++j) {
             const double u = 2 * std::numbers::pi * i / nu, v = 2 * std::numbers::pi * j / nv;
-            m.positions.push_back(Vec3f(Vec3d((R + r * std::cos(v)) * std::cos(u),
-                                              (R + r * std::cos(v)) * std::sin(u), r * std::sin(v))));
+            m.positions.push_back(Vec3f(
+                Vec3d((R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v))));
         }
     auto id = [&](int i, int j) { return std::uint32_t(((i + nu) % nu) * nv + (j + nv) % nv); };
     for (int i = 0; i < nu; ++i)
@@ -94,9 +94,7 @@ inline Mesh torus_mesh(double R, double r, int nu, int nv) {
     return m;
 }
 
-inline double torus_sdf(Vec3d p, double R, double r) {
-    return std::hypot(std::hypot(p.x, p.y) - R, p.z) - r;
-}
+inline double torus_sdf(Vec3d p, double R, double r) { return std::hypot(std::hypot(p.x, p.y) - R, p.z) - r; }
 
 // A flat square sheet [−s, s]² at z = 0, n × n quads.
 inline Mesh sheet(double s, int n) {

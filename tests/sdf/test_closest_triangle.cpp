@@ -26,14 +26,14 @@ Mesh dirty_soup() {
         for (int k = 0; k < 3; ++k) m.positions.push_back(c + Vec3f(u(rng), u(rng), u(rng)) * 0.2f);
         m.triangles.push_back({base, base + 1, base + 2});
     }
-    m.triangles.push_back({0, 0, 0});                  // a point
-    m.triangles.push_back({3, 4, 3});                  // a segment
+    m.triangles.push_back({0, 0, 0});  // a point
+    m.triangles.push_back({3, 4, 3});  // a segment
     m.positions.push_back(Vec3f(2, 2, 2));
     m.positions.push_back(Vec3f(3, 3, 3));
     m.positions.push_back(Vec3f(4, 4, 4));
     const auto n = std::uint32_t(m.positions.size());
-    m.triangles.push_back({n - 3, n - 2, n - 1});      // collinear
-    m.triangles.push_back(m.triangles[5]);             // duplicate
+    m.triangles.push_back({n - 3, n - 2, n - 1});  // collinear
+    m.triangles.push_back(m.triangles[5]);         // duplicate
     return m;
 }
 
@@ -41,7 +41,7 @@ TEST(ClosestPointOnTriangle, RegionsOfAUnitTriangle) {
     const Vec3d a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
     auto near = [](Vec3d x, Vec3d y) { return norm(x - y) < 1e-12; };
     EXPECT_TRUE(near(closest_point_on_triangle({0.2, 0.2, 5}, a, b, c), {0.2, 0.2, 0}));  // face
-    EXPECT_TRUE(near(closest_point_on_triangle({-1, -1, 1}, a, b, c), a));               // vertex
+    EXPECT_TRUE(near(closest_point_on_triangle({-1, -1, 1}, a, b, c), a));                // vertex
     EXPECT_TRUE(near(closest_point_on_triangle({0.5, -2, 0}, a, b, c), {0.5, 0, 0}));     // edge ab
     EXPECT_TRUE(near(closest_point_on_triangle({1, 1, 0}, a, b, c), {0.5, 0.5, 0}));      // edge bc
     EXPECT_TRUE(near(closest_point_on_triangle({3, 0, 0}, a, a, b), b));                  // degenerate
@@ -58,8 +58,8 @@ void expect_agree(const Mesh& m, const ClosestTriangleQuery& ref, const ClosestT
         ASSERT_TRUE(b.found());
         EXPECT_NEAR(a.squared_distance, b.squared_distance, 1e-9 * (1 + a.squared_distance));
         const Tri& t = m.triangles[b.triangle];
-        const Vec3d onb = closest_point_on_triangle(p, Vec3d(m.positions[t[0]]), Vec3d(m.positions[t[1]]),
-                                                    Vec3d(m.positions[t[2]]));
+        const Vec3d onb =
+            closest_point_on_triangle(p, Vec3d(m.positions[t[0]]), Vec3d(m.positions[t[1]]), Vec3d(m.positions[t[2]]));
         EXPECT_NEAR(squared_norm(onb - p), b.squared_distance, 1e-9 * (1 + a.squared_distance));
         // Bounded search with a hint: the same distance when inside the bound, nothing outside.
         const double bound = 0.25;

@@ -125,8 +125,8 @@ TEST(ImageToVolume, AnisotropicSpacingIsResampledInWorldUnits) {
     EXPECT_EQ(v.grid.dims, (std::array<int, 3>{64, 64, 63}));  // 25 × 2.5 + 1
     EXPECT_EQ(v.grid.origin, origin);
     const SphereError e = sphere_error(extract_surface(v), origin + c, R);
-    EXPECT_LT(e.mean_radial, 0.4);   // the coarse staircase along z, interpolated
-    EXPECT_LT(e.max_radial, 1.3);    // half of 2.5, plus rounding
+    EXPECT_LT(e.mean_radial, 0.4);  // the coarse staircase along z, interpolated
+    EXPECT_LT(e.max_radial, 1.3);   // half of 2.5, plus rounding
     // A chosen voxel size: half as many samples along each axis.
     const Volume coarse = image_to_volume(im, {.surface = {.label = 1.0}, .voxel_size = 2.0});
     EXPECT_EQ(coarse.grid.dims, (std::array<int, 3>{32, 32, 32}));
@@ -137,7 +137,7 @@ TEST(ImageToVolume, RotatedAndReflectedAxesArePlacedInTheWorld) {
     // is computed in the image's frame and its placement maps it back onto the world's ball.
     const double a = std::numbers::pi / 6, h = 0.8;
     const std::array<Vec3d, 3> axes{Vec3d{std::cos(a), std::sin(a), 0} * h, Vec3d{-std::sin(a), std::cos(a), 0} * h,
-                                     Vec3d{0, 0, -h}};
+                                    Vec3d{0, 0, -h}};
     const Vec3d origin{-10, -12, 30};
     const Vec3d c = origin + axes[0] * 24.3 + axes[1] * 25.1 + axes[2] * 23.7;  // a world point inside the grid
     const double R = 14.0;
@@ -194,9 +194,13 @@ TEST(ImageToVolume, BadImagesAreRefusedWithTheReason) {
     ScalarImage nan = im;
     nan.values[5] = std::nanf("");
     EXPECT_NE(message([&] { image_to_volume(nan); }).find("sample 5"), std::string::npos);
-    EXPECT_NE(message([&] { ImageToVolumeOptions o;
-        o.voxel_size = -1;
-        image_to_volume(im, o);; }).find("voxel_size"), std::string::npos);
+    EXPECT_NE(message([&] {
+                  ImageToVolumeOptions o;
+                  o.voxel_size = -1;
+                  image_to_volume(im, o);
+                  ;
+              }).find("voxel_size"),
+              std::string::npos);
     // binary masks: two values, one of them 0
     ScalarImage two = im;
     two.values[3] = 0;

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <string>
 #include <numbers>
+#include <string>
 
 #include <gtest/gtest.h>
 

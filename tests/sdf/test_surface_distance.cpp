@@ -47,7 +47,8 @@ TEST(SurfaceDistance, CubeAgainstItselfAndShifted) {
     EXPECT_NEAR(d.max_a_to_b, s, 1e-5);
     EXPECT_NEAR(d.max_b_to_a, s, 1e-5);
     EXPECT_NEAR(d.mean, (s + (1 - std::pow(1 - 2 * s, 3)) / 6 + 2 * s * s) / 6, 1e-3);
-    EXPECT_NEAR(d.rms, std::sqrt((s * s + (s * s - 8 * s * s * s / 3 + 2 * std::pow(s, 4)) + 4 * s * s * s / 3) / 6), 1e-3);
+    EXPECT_NEAR(d.rms, std::sqrt((s * s + (s * s - 8 * s * s * s / 3 + 2 * std::pow(s, 4)) + 4 * s * s * s / 3) / 6),
+                1e-3);
 }
 
 TEST(SurfaceDistance, AngleBetweenAPlaneAndATiltedPlane) {
@@ -97,7 +98,7 @@ TEST(SurfaceDistance, SamplesAreUniformByArea) {
     // a sampler uniform by face (1/2 on each) would give about 24.
     const double l = 2.0 * std::sqrt(2.0), s = std::sqrt(2.0);
     Mesh a;
-    a.positions = {Vec3f(0, 0, 0), Vec3f(float(l), 0, 0), Vec3f(0, float(l), 0),
+    a.positions = {Vec3f(0, 0, 0),   Vec3f(float(l), 0, 0),       Vec3f(0, float(l), 0),
                    Vec3f(100, 0, 0), Vec3f(float(100 + s), 0, 0), Vec3f(100, float(s), 0)};
     a.triangles = {{0, 1, 2}, {3, 4, 5}};
     Mesh b;

@@ -2,8 +2,8 @@
 #include "sdf/winding_number.h"
 
 #include <cmath>
-#include <numbers>
 #include <cstdio>
+#include <numbers>
 #include <random>
 
 #include <gtest/gtest.h>

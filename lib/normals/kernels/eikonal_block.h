@@ -17,7 +17,6 @@ namespace normalflow::engine {
 /// with the sorted neighbours a0 <= a1 <= a2 in turn: a0 + 1, then the 2-D, then the 3-D root.
 /// Returns 1 when a free sample decreased by more than kReinitTolerance to below limit (a value
 /// depends only on smaller ones, so the samples below limit converge whatever happens above it).
-int eikonal_block(const float* __restrict U0, const std::uint8_t* __restrict m0, float limit,
-                                float* __restrict out0);
+int eikonal_block(const float* __restrict U0, const std::uint8_t* __restrict m0, float limit, float* __restrict out0);
 
 }  // namespace normalflow::engine

@@ -9,9 +9,8 @@
 namespace normalflow::engine {
 
 template <FaceWeight kWeight, int kAxis>
-NF_ROW_KERNEL
-void face_row(const float* __restrict P, const float* __restrict N, const float* __restrict G, int q0, int n, int rows,
-              float band, float inv2mu2, float* __restrict F, float* __restrict E) {
+NF_ROW_KERNEL void face_row(const float* __restrict P, const float* __restrict N, const float* __restrict G, int q0,
+                            int n, int rows, float band, float inv2mu2, float* __restrict F, float* __restrict E) {
     constexpr int sa = kStride[kAxis], sb = kStride[(kAxis + 1) % 3], sc = kStride[(kAxis + 2) % 3];
     const float* N0 = N;
     const float* N1 = N + L3;
@@ -41,7 +40,8 @@ void face_row(const float* __restrict P, const float* __restrict N, const float*
             const float b2 = 0.25f * ((N2[q + sb] - N2[q - sb]) + (N2[q1 + sb] - N2[q1 - sb]));
             const float d2 = 0.25f * ((N2[q + sc] - N2[q - sc]) + (N2[q1 + sc] - N2[q1 - sc]));
             const float C2 = (a2 * dphi + b2 * gb + d2 * gc) * inv;
-            const float dn2 = ((a0 * a0 + b0 * b0 + d0 * d0) + (a1 * a1 + b1 * b1 + d1 * d1)) + (a2 * a2 + b2 * b2 + d2 * d2);
+            const float dn2 =
+                ((a0 * a0 + b0 * b0 + d0 * d0) + (a1 * a1 + b1 * b1 + d1 * d1)) + (a2 * a2 + b2 * b2 + d2 * d2);
             const float c2 = (C0 * C0 + C1 * C1) + C2 * C2;
             const float k2 = std::max(dn2 - c2 * g2, 0.0f);
             // a mask, not a branch (no short-circuit): the loop stays vectorisable
@@ -63,14 +63,23 @@ void face_row(const float* __restrict P, const float* __restrict N, const float*
     }
 }
 
-template void face_row<FaceWeight::One, 0>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::One, 1>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::One, 2>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::Frozen, 0>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::Frozen, 1>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::Frozen, 2>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::Live, 0>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::Live, 1>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
-template void face_row<FaceWeight::Live, 2>(const float* __restrict, const float* __restrict, const float* __restrict, int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::One, 0>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                           int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::One, 1>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                           int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::One, 2>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                           int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::Frozen, 0>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                              int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::Frozen, 1>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                              int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::Frozen, 2>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                              int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::Live, 0>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                            int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::Live, 1>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                            int, int, int, float, float, float* __restrict, float* __restrict);
+template void face_row<FaceWeight::Live, 2>(const float* __restrict, const float* __restrict, const float* __restrict,
+                                            int, int, int, float, float, float* __restrict, float* __restrict);
 
 }  // namespace normalflow::engine

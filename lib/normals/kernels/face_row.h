@@ -32,7 +32,7 @@ void face_row(const float* __restrict P, const float* __restrict N, const float*
 /// face_row for the faces x+½e_axis.
 template <FaceWeight kWeight>
 inline void face_rows(int axis, const float* P, const float* N, const float* G, int q0, int n, int rows, float band,
-               float inv2mu2, float* F, float* E) {
+                      float inv2mu2, float* F, float* E) {
     switch (axis) {
         case 0: face_row<kWeight, 0>(P, N, G, q0, n, rows, band, inv2mu2, F, E); break;
         case 1: face_row<kWeight, 1>(P, N, G, q0, n, rows, band, inv2mu2, F, E); break;

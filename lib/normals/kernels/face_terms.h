@@ -8,8 +8,7 @@
 namespace normalflow::engine {
 
 /// Face terms at the staggered point q + ½e_a (Appendix B, Eq. 43–47, 50): flux column m and κ².
-inline void face_terms(const float* P, const float* const N[3], int q, int sa, int sb, int sc, float m[3],
-                       float& k2) {
+inline void face_terms(const float* P, const float* const N[3], int q, int sa, int sb, int sc, float m[3], float& k2) {
     const int q1 = q + sa;
     const float dphi = P[q1] - P[q];
     const float gb = 0.25f * ((P[q + sb] - P[q - sb]) + (P[q1 + sb] - P[q1 - sb]));

@@ -13,8 +13,8 @@ namespace normalflow::engine {
 /// first row's first sample in the padded local buffer (rows L apart; hn, m, out kBlockDim apart).
 /// Branch-free, so that it vectorises.
 /// Returns 1 if an active result is not finite.
-int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m,
-                            float dt, int rows, float* __restrict out);
+int refit_row(const float* __restrict P, const float* __restrict hn, const std::uint8_t* __restrict m, float dt,
+              int rows, float* __restrict out);
 
 /// The refit's rate at the samples of `rows` rows: out = |∇φ|_upwind (H_φ − hn) where m, 0
 /// elsewhere (the stages of the super-time-stepping refit). Layout as refit_row.

@@ -9,11 +9,11 @@
 namespace normalflow::engine {
 
 NF_ROW_KERNEL int update_row(const float* __restrict fx0, const float* __restrict fx1, const float* __restrict fx2,
-               const float* __restrict fy0, const float* __restrict fy1, const float* __restrict fy2,
-               const float* __restrict fz0, const float* __restrict fz1, const float* __restrict fz2,
-               const float* __restrict n0, const float* __restrict n1, const float* __restrict n2,
-               const std::uint8_t* __restrict m, float dt, int rows, float* __restrict d0, float* __restrict d1,
-               float* __restrict d2) {
+                             const float* __restrict fy0, const float* __restrict fy1, const float* __restrict fy2,
+                             const float* __restrict fz0, const float* __restrict fz1, const float* __restrict fz2,
+                             const float* __restrict n0, const float* __restrict n1, const float* __restrict n2,
+                             const std::uint8_t* __restrict m, float dt, int rows, float* __restrict d0,
+                             float* __restrict d1, float* __restrict d2) {
     int nonfinite = 0;
     for (int r = 0; r < rows; ++r, fx0 += L, fx1 += L, fx2 += L, fy0 += L, fy1 += L, fy2 += L, fz0 += L, fz1 += L,
              fz2 += L, n0 += L, n1 += L, n2 += L, m += kBlockDim, d0 += kBlockDim, d1 += kBlockDim, d2 += kBlockDim) {

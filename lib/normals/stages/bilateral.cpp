@@ -142,9 +142,8 @@ public:
         // keeps them all: its graph joins grid neighbours).
         const int stride = tv_ || !c.opt.thin_samples ? 1 : std::max(1, int(std::floor(ell / kStrideLength)));
         S_.build(band, w.normals, kShell, radius, c.opt.active_band, stride);
-        c.record().filter_points = std::size_t(std::count_if(S_.index.begin(), S_.index.end(), [](std::size_t i) {
-            return i != SurfaceSamples::kPadding;
-        }));
+        c.record().filter_points = std::size_t(std::count_if(
+            S_.index.begin(), S_.index.end(), [](std::size_t i) { return i != SurfaceSamples::kPadding; }));
         const std::size_t n = S_.size();
         for (int k = 0; k < 3; ++k) {
             copy_samples(S_.n[k], cur_[k]);

@@ -22,11 +22,11 @@ public:
     virtual void filter_normals(StageContext& c) = 0;
 };
 
-std::unique_ptr<NormalFilter> make_isotropic_filter();    ///< G(κ²) = κ² (Eq. 15)
-std::unique_ptr<NormalFilter> make_anisotropic_filter();  ///< Perona–Malik (Eq. 20), see SmoothOptions
-std::unique_ptr<NormalFilter> make_highboost_filter();    ///< isotropic, then Eq. 21–22
-std::unique_ptr<NormalFilter> make_bilateral_filter();    ///< bilateral.cpp
-std::unique_ptr<NormalFilter> make_guided_filter();       ///< bilateral.cpp, guided range
+std::unique_ptr<NormalFilter> make_isotropic_filter();        ///< G(κ²) = κ² (Eq. 15)
+std::unique_ptr<NormalFilter> make_anisotropic_filter();      ///< Perona–Malik (Eq. 20), see SmoothOptions
+std::unique_ptr<NormalFilter> make_highboost_filter();        ///< isotropic, then Eq. 21–22
+std::unique_ptr<NormalFilter> make_bilateral_filter();        ///< bilateral.cpp
+std::unique_ptr<NormalFilter> make_guided_filter();           ///< bilateral.cpp, guided range
 std::unique_ptr<NormalFilter> make_total_variation_filter();  ///< bilateral.cpp, total_variation.h
 
 /// The filter of a mode; nullptr for MeanCurvature (no normals).

@@ -101,8 +101,8 @@ double NormalLoop::step(StageContext& c, Field3& src, Field3& dst, FaceWeight co
                         face_rows<FaceWeight::One>(a, P, N[0], nullptr, q0, count, nrows, band, inv2mu2, F[a][0], E);
                         break;
                     case FaceWeight::Frozen:
-                        face_rows<FaceWeight::Frozen>(a, P, N[0], g[a].data() + k * L3, q0, count, nrows, band,
-                                                      inv2mu2, F[a][0], E);
+                        face_rows<FaceWeight::Frozen>(a, P, N[0], g[a].data() + k * L3, q0, count, nrows, band, inv2mu2,
+                                                      F[a][0], E);
                         break;
                     case FaceWeight::Live:
                         face_rows<FaceWeight::Live>(a, P, N[0], nullptr, q0, count, nrows, band, inv2mu2, F[a][0], E);
@@ -142,10 +142,9 @@ double NormalLoop::step(StageContext& c, Field3& src, Field3& dst, FaceWeight co
         auto update_rows = [&](int y, int z, int count) {
             const int q0 = lidx(0, y, z);
             const std::size_t i0 = base + std::size_t(bidx(0, y, z));
-            nonfinite |= update_row(F[0][0] + q0, F[0][1] + q0, F[0][2] + q0, F[1][0] + q0, F[1][1] + q0,
-                                    F[1][2] + q0, F[2][0] + q0, F[2][1] + q0, F[2][2] + q0, N[0] + q0, N[1] + q0,
-                                    N[2] + q0, mask + i0, dt, count, dst[0].data() + i0,
-                                    dst[1].data() + i0, dst[2].data() + i0);
+            nonfinite |= update_row(F[0][0] + q0, F[0][1] + q0, F[0][2] + q0, F[1][0] + q0, F[1][1] + q0, F[1][2] + q0,
+                                    F[2][0] + q0, F[2][1] + q0, F[2][2] + q0, N[0] + q0, N[1] + q0, N[2] + q0,
+                                    mask + i0, dt, count, dst[0].data() + i0, dst[1].data() + i0, dst[2].data() + i0);
         };
         // Row by row over the span of a z plane's rows with active samples, in one call (see
         // face_row). A row inside the span without any gets dst = N, which dst already holds

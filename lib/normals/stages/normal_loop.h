@@ -29,8 +29,7 @@ public:
     /// One step of the normal loop on src → dst over the active blocks; returns G(src).
     /// update == false: only the energy. g: the frozen conductance per axis when w is Frozen.
     /// dst must hold src outside the active samples (the step writes only those rows).
-    double step(StageContext& c, Field3& src, Field3& dst, FaceWeight w, bool update,
-                const PaddedFaces* g = nullptr);
+    double step(StageContext& c, Field3& src, Field3& dst, FaceWeight w, bool update, const PaddedFaces* g = nullptr);
 
     /// normal_steps steps on work().normals (ping-pong with work().normals_next), the energy G
     /// before each and after the last into c.record().
@@ -43,7 +42,7 @@ private:
     void init_normals(StageContext& c);
     void cache_phi(StageContext& c);
 
-    Samples pad_phi_;  // per active block: φ with its halo (L³), during the normal loop
+    Samples pad_phi_;                     // per active block: φ with its halo (L³), during the normal loop
     std::vector<std::uint8_t> row_band_;  // per active block: which rows of faces touch the band (row_flag)
 };
 

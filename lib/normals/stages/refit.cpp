@@ -144,8 +144,8 @@ double refit_step(StageContext& c, bool with_energy) {
             const auto [y0, y1] = row_span(0, [&](int y) { return any_in_row(M + bidx(0, y, z)); });
             if (y1 < y0) continue;
             const std::size_t i0 = base + std::size_t(bidx(0, y0, z));
-            nonfinite |= refit_row(P + lidx(0, y0, z), w.hn.data() + i0, mask + i0, dt, y1 - y0 + 1,
-                                   w.phi_next.data() + i0);
+            nonfinite |=
+                refit_row(P + lidx(0, y0, z), w.hn.data() + i0, mask + i0, dt, y1 - y0 + 1, w.phi_next.data() + i0);
             if (with_energy) add_plane_energy(P, mask, w.normals, base, z, y0, y1, e);
         }
         if (nonfinite) bad = true;
@@ -338,8 +338,8 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
             runaway = true;
             break;
         }
-        std::swap(prev_phi, phi);    // prev_phi = this super step's start
-        std::swap(phi, *ring[0]);    // φ = Y_s; ring[0] holds an old iterate (equal off the mask)
+        std::swap(prev_phi, phi);  // prev_phi = this super step's start
+        std::swap(phi, *ring[0]);  // φ = Y_s; ring[0] holds an old iterate (equal off the mask)
         ++kept;
         time_kept += tau;
         prev = d;
@@ -440,7 +440,7 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, int patience, std:
     double best = 0.0;
     int since_best = 0;
     for (int s = 0; s < max_steps; ++s) {
-        std::swap(w.phi_next, prev_phi);  // prev_phi ← φ_{s−1}; w.phi_next is overwritten by the step
+        std::swap(w.phi_next, prev_phi);       // prev_phi ← φ_{s−1}; w.phi_next is overwritten by the step
         const double d = refit_step(c, true);  // D(φ_s); now w.phi_next = φ_s, phi = φ_{s+1}
         ++c.record().refit_evaluations;
         ds.push_back(d);

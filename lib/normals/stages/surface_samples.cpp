@@ -100,24 +100,27 @@ void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, f
     const float lim = reach + tau + margin;
     const int k = int(std::ceil(lim / float(kBlockDim)));
     const std::vector<std::int32_t>& act = band.active();
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, act.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t a = r.begin(); a != r.end(); ++a) {
-            const std::int32_t b = act[a];
-            const auto& bc = band.block_coord(std::size_t(b));
-            std::vector<std::int32_t>& out = near_[std::size_t(b)];
-            for (int dz = -k; dz <= k; ++dz)
-                for (int dy = -k; dy <= k; ++dy)
-                    for (int dx = -k; dx <= k; ++dx) {
-                        const std::int32_t s = band.block_at(bc[0] + dx, bc[1] + dy, bc[2] + dz);
-                        if (s < 0 || off_[(std::size_t(s) + 1) * kRuns] == off_[std::size_t(s) * kRuns]) continue;
-                        // gap between the two 8-sample boxes along each axis
-                        const auto gap = [](int d) { return float(std::max(0, std::abs(d) * kBlockDim - (kBlockDim - 1))); };
-                        const float gx = gap(dx), gy = gap(dy), gz = gap(dz);
-                        if (gx * gx + gy * gy + gz * gz <= lim * lim) out.push_back(s);
-                    }
-            std::sort(out.begin(), out.end());
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, act.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t a = r.begin(); a != r.end(); ++a) {
+                const std::int32_t b = act[a];
+                const auto& bc = band.block_coord(std::size_t(b));
+                std::vector<std::int32_t>& out = near_[std::size_t(b)];
+                for (int dz = -k; dz <= k; ++dz)
+                    for (int dy = -k; dy <= k; ++dy)
+                        for (int dx = -k; dx <= k; ++dx) {
+                            const std::int32_t s = band.block_at(bc[0] + dx, bc[1] + dy, bc[2] + dz);
+                            if (s < 0 || off_[(std::size_t(s) + 1) * kRuns] == off_[std::size_t(s) * kRuns]) continue;
+                            // gap between the two 8-sample boxes along each axis
+                            const auto gap = [](int d) {
+                                return float(std::max(0, std::abs(d) * kBlockDim - (kBlockDim - 1)));
+                            };
+                            const float gx = gap(dx), gy = gap(dy), gz = gap(dz);
+                            if (gx * gx + gy * gy + gz * gz <= lim * lim) out.push_back(s);
+                        }
+                std::sort(out.begin(), out.end());
+            }
+        });
 }
 
 }  // namespace normalflow::engine

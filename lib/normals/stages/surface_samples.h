@@ -53,15 +53,21 @@ public:
     const std::vector<std::int32_t>& near(std::int32_t b) const { return near_[std::size_t(b)]; }
     /// Squared distance from q to the bounding box of block b's points: a lower bound of
     /// |q − p_j|² over them (infinite for a block without samples).
-    float box_distance2(std::int32_t b, const float q[3]) const { return box_d2(std::size_t(b) * (kRuns + 1) + kRuns, q); }
+    float box_distance2(std::int32_t b, const float q[3]) const {
+        return box_d2(std::size_t(b) * (kRuns + 1) + kRuns, q);
+    }
     /// Whether run k of block b has samples.
     bool run_empty(std::int32_t b, int k) const {
         const std::size_t r = std::size_t(b) * kRuns + std::size_t(k);
         return off_[r + 1] == off_[r];
     }
     /// The samples of run k of block b: [run_begin(b, k), run_end(b, k)).
-    std::size_t run_begin(std::int32_t b, int k) const { return std::size_t(off_[std::size_t(b) * kRuns + std::size_t(k)]); }
-    std::size_t run_end(std::int32_t b, int k) const { return std::size_t(off_[std::size_t(b) * kRuns + std::size_t(k) + 1]); }
+    std::size_t run_begin(std::int32_t b, int k) const {
+        return std::size_t(off_[std::size_t(b) * kRuns + std::size_t(k)]);
+    }
+    std::size_t run_end(std::int32_t b, int k) const {
+        return std::size_t(off_[std::size_t(b) * kRuns + std::size_t(k) + 1]);
+    }
 
     /// The runs (b2·kRuns + k2) of the blocks near b with points within `reach` of the box of
     /// run k of block b: every sample of that run finds its neighbours within reach among them.
@@ -120,9 +126,9 @@ private:
         return d2;
     }
 
-    float tau_ = 0;   // |φ| of the points at most
+    float tau_ = 0;  // |φ| of the points at most
     int stride_ = 1;
-    std::vector<std::int64_t> off_;  // run k of block b starts at off_[b·kRuns + k]
+    std::vector<std::int64_t> off_;                      // run k of block b starts at off_[b·kRuns + k]
     std::vector<std::array<float, 3>> box_lo_, box_hi_;  // per block: its kRuns runs' boxes, then its own
     std::vector<std::vector<std::int32_t>> near_;
 };

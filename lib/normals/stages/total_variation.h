@@ -56,8 +56,8 @@ private:
 
     const SurfaceSamples* S_ = nullptr;
     std::vector<std::int32_t> fwd_[3], bwd_[3];  ///< neighbour along +axis / −axis, −1: none
-    Samples f_[3], bar_[3], next_[3];             ///< F, the extrapolated N̄, the new N
-    Samples y_[9];                                ///< the dual variable, 3×3 per sample (row c, column a)
+    Samples f_[3], bar_[3], next_[3];            ///< F, the extrapolated N̄, the new N
+    Samples y_[9];                               ///< the dual variable, 3×3 per sample (row c, column a)
     float tau_ = 0, sigma_ = 0;
     double initial_ = 0;
 };

@@ -33,9 +33,18 @@ void check(FaceWeight w, int axis, unsigned seed) {
         const int rows = kBlockDim - lo[1];
         const float* g = w == FaceWeight::Frozen ? G.data() : nullptr;
         switch (w) {
-            case FaceWeight::One: face_rows<FaceWeight::One>(axis, P.data(), N.data(), g, lidx(lo[0], lo[1], z), n, rows, band, inv2mu2, F.data(), E.data()); break;
-            case FaceWeight::Frozen: face_rows<FaceWeight::Frozen>(axis, P.data(), N.data(), g, lidx(lo[0], lo[1], z), n, rows, band, inv2mu2, F.data(), E.data()); break;
-            case FaceWeight::Live: face_rows<FaceWeight::Live>(axis, P.data(), N.data(), g, lidx(lo[0], lo[1], z), n, rows, band, inv2mu2, F.data(), E.data()); break;
+            case FaceWeight::One:
+                face_rows<FaceWeight::One>(axis, P.data(), N.data(), g, lidx(lo[0], lo[1], z), n, rows, band, inv2mu2,
+                                           F.data(), E.data());
+                break;
+            case FaceWeight::Frozen:
+                face_rows<FaceWeight::Frozen>(axis, P.data(), N.data(), g, lidx(lo[0], lo[1], z), n, rows, band,
+                                              inv2mu2, F.data(), E.data());
+                break;
+            case FaceWeight::Live:
+                face_rows<FaceWeight::Live>(axis, P.data(), N.data(), g, lidx(lo[0], lo[1], z), n, rows, band, inv2mu2,
+                                            F.data(), E.data());
+                break;
         }
     }
     const int sa = kStride[axis], sb = kStride[(axis + 1) % 3], sc = kStride[(axis + 2) % 3];
@@ -58,9 +67,10 @@ void check(FaceWeight w, int axis, unsigned seed) {
                     e = (1.0f - c) * (1.0f / inv2mu2);
                 }
                 for (int c = 0; c < 3; ++c)
-                    ASSERT_TRUE(same_bits(F[c * L3 + q], g * m[c]))
-                        << "F" << c << " at (" << x << "," << y << "," << z << "): " << F[c * L3 + q] << " vs " << g * m[c];
-                ASSERT_TRUE(same_bits(E[q], e)) << "E at (" << x << "," << y << "," << z << "): " << E[q] << " vs " << e;
+                    ASSERT_TRUE(same_bits(F[c * L3 + q], g * m[c])) << "F" << c << " at (" << x << "," << y << "," << z
+                                                                    << "): " << F[c * L3 + q] << " vs " << g * m[c];
+                ASSERT_TRUE(same_bits(E[q], e))
+                    << "E at (" << x << "," << y << "," << z << "): " << E[q] << " vs " << e;
             }
     EXPECT_GT(inside, 20);  // both kinds of faces were tested
     EXPECT_GT(outside, 20);

@@ -58,11 +58,11 @@ int run_kernel(const Inputs& in, float dt, std::vector<float> (&d)[3]) {
     int nonfinite = 0;
     for (int z = 0; z < kBlockDim; ++z) {  // a plane per call, as the engine
         const int q0 = lidx(0, 0, z), i0 = bidx(0, 0, z);
-        nonfinite |= update_row(in.F[0][0].data() + q0, in.F[0][1].data() + q0, in.F[0][2].data() + q0,
-                                in.F[1][0].data() + q0, in.F[1][1].data() + q0, in.F[1][2].data() + q0,
-                                in.F[2][0].data() + q0, in.F[2][1].data() + q0, in.F[2][2].data() + q0,
-                                in.N[0].data() + q0, in.N[1].data() + q0, in.N[2].data() + q0, in.m.data() + i0, dt,
-                                kBlockDim, d[0].data() + i0, d[1].data() + i0, d[2].data() + i0);
+        nonfinite |=
+            update_row(in.F[0][0].data() + q0, in.F[0][1].data() + q0, in.F[0][2].data() + q0, in.F[1][0].data() + q0,
+                       in.F[1][1].data() + q0, in.F[1][2].data() + q0, in.F[2][0].data() + q0, in.F[2][1].data() + q0,
+                       in.F[2][2].data() + q0, in.N[0].data() + q0, in.N[1].data() + q0, in.N[2].data() + q0,
+                       in.m.data() + i0, dt, kBlockDim, d[0].data() + i0, d[1].data() + i0, d[2].data() + i0);
     }
     return nonfinite;
 }
