@@ -152,6 +152,7 @@ int run_voxelize(const VoxelizeArgs& a) {
     PipelineReport r;
     const Volume v = naming(a.input, [&] { return mesh_to_volume(mesh, opt, &r, &progress); });
     Json j = report_json("voxelize", r, t_read, &info);
+    j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
     j.set("input", input_json(a.input, info, mesh, r));
     j["voxelize"].set("band_half_width", v.half_width).set("memory_bytes", v.memory_bytes());
     clock.lap();
@@ -179,6 +180,7 @@ int run_extract(const ExtractArgs& a) {
     const Mesh m = naming(a.input, [&] { return volume_to_mesh(v, opt, &r, &progress); });
     Json j = Json::object();
     j.set("command", "extract").set("extract", to_json(r.extract));
+    j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
     if (r.decimated) j.set("decimate", to_json(r.decimate));
     j.set("seconds",
           Json::object().set("read", t_read).set("extract", r.seconds.extract).set("decimate", r.seconds.decimate));

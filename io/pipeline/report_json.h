@@ -62,6 +62,7 @@ Json to_json(const PipelineReport& r);
 /// mu_robust, normal_dt, refit_steps, refit_dt, refit_tolerance, refit_super_steps, extend_by_gather,
 /// all_samples, preserve_volume, second_order, active_band, connectivity, closed, fit_to_normal_map,
 /// projection_steps, relax_steps, fit_steps, boundary_rings, iso, target_faces, max_error, decimator.
+/// Without o.smoothing (voxelize, extract) the engine's keys are left out.
 /// voxel_size: the grid's (a scan conversion's, r.scan.grid; a volume input's own).
 Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double voxel_size);
 

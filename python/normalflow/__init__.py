@@ -29,6 +29,14 @@ __all__ = ["Mesh", "Volume", "read_mesh", "write_mesh", "read_volume", "image_to
            "OutOfMemory", "Cancelled", "__version__"]
 
 
+def _mesh_report(self):
+    """What normalflow info reports of the mesh: counts, closed, manifold, components, defects, area, volume."""
+    return _json.loads(self._report_json())
+
+
+Mesh.report = _mesh_report
+
+
 def _mesh(mesh_or_vertices, faces=None):
     if isinstance(mesh_or_vertices, Mesh):
         if faces is not None:

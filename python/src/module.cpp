@@ -280,9 +280,7 @@ PYBIND11_MODULE(_normalflow, m) {
         .def_property_readonly(
             "texcoords", [](py::object self) { return view<float, 2>(self.cast<Mesh&>().texcoords, self); },
             "(n, 2) float32, or None")
-        .def(
-            "report", [](const Mesh& mesh) { return to_json(mesh_report(mesh)).dump(); },
-            "JSON: counts, closed, manifold, components (as normalflow info)")
+        .def("_report_json", [](const Mesh& mesh) { return to_json(mesh_report(mesh)).dump(); })
         .def("__repr__", [](const Mesh& mesh) {
             return "<normalflow.Mesh " + std::to_string(mesh.positions.size()) + " vertices, " +
                    std::to_string(mesh.triangles.size()) + " triangles>";

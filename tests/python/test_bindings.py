@@ -72,6 +72,8 @@ def test_numpy_in_numpy_out_smooths_a_noisy_sphere():
     assert out.vertices.dtype == np.float32 and out.vertices.shape[1] == 3
     assert out.faces.dtype == np.uint32 and out.faces.max() < len(out.vertices)
     assert out.normals.shape == out.vertices.shape
+    info = out.report()
+    assert info["closed"] and info["manifold"] and info["components"] == 1 and info["triangles"] == len(out.faces)
     assert np.allclose(np.linalg.norm(out.normals, axis=1), 1, atol=1e-3)
     assert report["smooth"]["iterations"] >= 1
 
