@@ -33,6 +33,13 @@ struct ExtractArgs {
     OutputFlags out;
 };
 
+struct RemeshArgs {
+    std::string input, output;
+    PipelineOptions pipeline;
+    DracoOptions draco;  ///< quantization and level for .drc / .glb outputs
+    OutputFlags out;
+};
+
 struct SmoothArgs {
     std::string input, output;
     PipelineOptions pipeline;
@@ -303,6 +310,34 @@ int run_smooth(const SmoothArgs& a) {
     return 0;
 }
 
+int run_remesh(const RemeshArgs& a) {
+    Stopwatch total;
+    TerminalProgress progress(a.out);
+    PipelineOptions opt = a.pipeline;
+    opt.smoothing = false;
+    opt.connectivity = Connectivity::Remesh;
+    opt.smooth.threads = opt.scan.threads;
+    validate(opt);
+    if (mesh_format_from_path(a.output) == MeshFormat::Unknown)
+        throw InvalidInput("remesh: " + a.output + ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc)");
+    progress.begin("read");
+    Stopwatch clock;
+    ReadInfo info;
+    const Mesh mesh = read_mesh(a.input, &info);
+    const double t_read = clock.lap();
+    const PipelineResult result = naming(a.input, [&] { return smooth_mesh(mesh, opt, &progress); });
+    const PipelineReport& r = result.report;
+    Json j = report_json("remesh", r, t_read, &info);
+    j.set("input", input_json(a.input, info, mesh, r));
+    j.set("parameters", parameters_json(opt, r, r.scan.grid.voxel_size));
+    j["seconds"].set("extract", r.seconds.extract);
+    if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
+    write_result(a.output, result.mesh, progress, j, a.draco);
+    finish(j, a.out, total, progress);
+    progress.note("remesh: " + a.output + " (" + std::to_string(result.mesh.triangles.size()) + " triangles)");
+    return 0;
+}
+
 }  // namespace
 
 void add_voxelize_command(CLI::App& app) {
@@ -327,6 +362,21 @@ void add_extract_command(CLI::App& app) {
     add_decimation_options(cmd, a->pipeline);
     add_output_flags(cmd, a->out);
     on_run(cmd, a, run_extract);
+}
+
+void add_remesh_command(CLI::App& app) {
+    auto a = std::make_shared<RemeshArgs>();
+    auto* cmd = app.add_subcommand(
+        "remesh", "re-mesh any mesh as a closed manifold surface through its volume, creases and corners kept");
+    cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
+    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
+    add_grid_options(cmd, a->pipeline);
+    add_remesh_options(cmd, a->pipeline);
+    add_decimation_options(cmd, a->pipeline);
+    add_draco_options(cmd, a->draco);
+    add_config_option(cmd);
+    add_output_flags(cmd, a->out);
+    on_run(cmd, a, run_remesh);
 }
 
 void add_smooth_command(CLI::App& app) {

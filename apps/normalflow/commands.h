@@ -12,6 +12,7 @@ void add_info_command(CLI::App& app);       // cmd_info.cpp
 void add_voxelize_command(CLI::App& app);   // cmd_pipeline.cpp
 void add_extract_command(CLI::App& app);    // cmd_pipeline.cpp
 void add_smooth_command(CLI::App& app);     // cmd_pipeline.cpp
+void add_remesh_command(CLI::App& app);     // cmd_pipeline.cpp
 void add_batch_command(CLI::App& app);      // cmd_batch.cpp
 void add_convert_command(CLI::App& app);    // cmd_convert.cpp
 void add_taubin_command(CLI::App& app);     // cmd_taubin.cpp

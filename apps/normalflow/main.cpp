@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
     add_voxelize_command(app);
     add_extract_command(app);
     add_smooth_command(app);
+    add_remesh_command(app);
     add_batch_command(app);
     add_convert_command(app);
     add_compress_command(app);

@@ -157,6 +157,16 @@ void add_smooth_options(CLI::App* cmd, PipelineOptions& p) {
         ->capture_default_str();
 }
 
+void add_remesh_options(CLI::App* cmd, PipelineOptions& p) {
+    p.sharpen = true;
+    cmd->add_flag("!--no-sharpen", p.sharpen,
+                  "keep the extraction's vertices on the grid edges (creases become one-voxel bevels) instead of "
+                  "moving them onto the input's creases and corners");
+    cmd->add_flag("--closed", p.closed,
+                  "re-mesh an open input as a closed, watertight surface (3D printing, tetrahedra) instead of "
+                  "trimming it to the input's footprint");
+}
+
 void add_decimation_options(CLI::App* cmd, PipelineOptions& p) {
     cmd->add_option("--target-faces", p.target_faces,
                     "decimate the result to at most N faces (quadric edge collapse, checked; see --decimator)")

@@ -19,6 +19,9 @@ void add_volume_input_options(CLI::App* cmd, VolumeInput& v, bool voxel_size);
 /// --closed, the fit's); smooth.
 void add_smooth_options(CLI::App* cmd, PipelineOptions& p);
 
+/// remesh: --no-sharpen (p.sharpen is set true first: the default) and --closed.
+void add_remesh_options(CLI::App* cmd, PipelineOptions& p);
+
 /// --target-faces, --max-error and --decimator: the decimation of a re-meshed result (volume_to_mesh).
 void add_decimation_options(CLI::App* cmd, PipelineOptions& p);
 

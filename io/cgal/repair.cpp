@@ -58,8 +58,13 @@ struct ReverseRecorder : PMP::Default_orientation_visitor {
 
 }  // namespace
 
-std::size_t count_self_intersections(const Mesh& mesh) {
+std::size_t count_self_intersections(const Mesh& mesh) { return self_intersecting_pairs(mesh).size(); }
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> self_intersecting_pairs(const Mesh& mesh,
+                                                                             const std::vector<char>* only) {
     check_mesh(mesh, "count_self_intersections");
+    if (only && only->size() != mesh.triangles.size())
+        throw InvalidInput("self_intersecting_pairs: one flag per face expected");
     const Mesh m = weld_exact(mesh);
     std::vector<Point> pts;
     pts.reserve(m.positions.size());
@@ -75,14 +80,19 @@ std::size_t count_self_intersections(const Mesh& mesh) {
         if (collapsed(t) || CGAL::collinear(pts[t[0]], pts[t[1]], pts[t[2]])) continue;
         boxes.emplace_back(pts[t[0]].bbox() + pts[t[1]].bbox() + pts[t[2]].bbox(), f);
     }
-    std::vector<const Box*> ptr;
+    std::vector<const Box*> ptr, marked;
     ptr.reserve(boxes.size());
-    for (const Box& b : boxes) ptr.push_back(&b);
+    for (const Box& b : boxes) {
+        ptr.push_back(&b);
+        if (only && (*only)[b.info()]) marked.push_back(&b);
+    }
 
-    std::size_t count = 0;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     auto test = [&](const Box* x, const Box* y) {
         const Tri& A = T[x->info()];
         const Tri& B = T[y->info()];
+        const std::pair<std::uint32_t, std::uint32_t> pair(std::uint32_t(std::min(x->info(), y->info())),
+                                                           std::uint32_t(std::max(x->info(), y->info())));
         int ia[3] = {0, 0, 0}, ib[3] = {0, 0, 0}, shared = 0;
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j)
@@ -92,7 +102,7 @@ std::size_t count_self_intersections(const Mesh& mesh) {
                     ++shared;
                 }
         if (shared == 3) {  // duplicate face (either orientation)
-            ++count;
+            pairs.push_back(pair);
             return;
         }
         if (shared == 2) {  // shared edge pq: a fold-over iff r and s are coplanar with it, on the same side
@@ -100,20 +110,33 @@ std::size_t count_self_intersections(const Mesh& mesh) {
             const Point& q = pts[A[ia[1]]];
             const Point& r = pts[A[3 - ia[0] - ia[1]]];
             const Point& s = pts[B[3 - ib[0] - ib[1]]];
-            if (CGAL::coplanar(p, q, r, s) && CGAL::coplanar_orientation(p, q, r, s) == CGAL::POSITIVE) ++count;
+            if (CGAL::coplanar(p, q, r, s) && CGAL::coplanar_orientation(p, q, r, s) == CGAL::POSITIVE)
+                pairs.push_back(pair);
             return;
         }
         const K::Triangle_3 ta(pts[A[0]], pts[A[1]], pts[A[2]]), tb(pts[B[0]], pts[B[1]], pts[B[2]]);
         if (shared == 1) {  // shared vertex: does the opposite edge of one face meet the other face?
             const K::Segment_3 sa(pts[A[(ia[0] + 1) % 3]], pts[A[(ia[0] + 2) % 3]]);
             const K::Segment_3 sb(pts[B[(ib[0] + 1) % 3]], pts[B[(ib[0] + 2) % 3]]);
-            if (CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa)) ++count;
+            if (CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa)) pairs.push_back(pair);
             return;
         }
-        if (CGAL::do_intersect(ta, tb)) ++count;
+        if (CGAL::do_intersect(ta, tb)) pairs.push_back(pair);
     };
-    CGAL::box_self_intersection_d(ptr.begin(), ptr.end(), test, std::ptrdiff_t(2000));
-    return count;
+    if (only) {  // the marked faces against all: each pair of two marked faces is found twice
+        CGAL::box_intersection_d(
+            marked.begin(), marked.end(), ptr.begin(), ptr.end(),
+            [&](const Box* x, const Box* y) {
+                if (x->info() == y->info()) return;
+                if ((*only)[y->info()] && y->info() < x->info()) return;
+                test(x, y);
+            },
+            std::ptrdiff_t(2000));
+    } else {
+        CGAL::box_self_intersection_d(ptr.begin(), ptr.end(), test, std::ptrdiff_t(2000));
+    }
+    std::sort(pairs.begin(), pairs.end());
+    return pairs;
 }
 
 RepairReport repair_mesh(Mesh& m, const RepairOptions& opt) {

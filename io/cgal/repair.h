@@ -4,7 +4,9 @@
 /// All CGAL code is in repair.cpp; no CGAL type appears here.
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/mesh.h"
@@ -28,6 +30,12 @@ namespace normalflow {
 /// \throw InvalidInput if a face index is out of range or a position is not finite.
 /// Cost: O(F log F + K) for K candidate pairs, single-threaded; about 60 ms for 21k faces.
 std::size_t count_self_intersections(const Mesh& m);
+
+/// The pairs counted by count_self_intersections, as face indices of m (smaller first), sorted; with `only` (one
+/// flag per face), just the pairs with a flagged face (a local change checked without the cost of the whole mesh's
+/// candidate pairs).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> self_intersecting_pairs(const Mesh& m,
+                                                                             const std::vector<char>* only = nullptr);
 
 /// Which repairs repair_mesh performs, in this order.
 struct RepairOptions {

@@ -17,6 +17,7 @@
 #include "sdf/memory_estimate.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/aabb_distance.h"
+#include "io/cgal/repair.h"
 #endif
 #ifdef NORMALFLOW_HAS_MESHOPT
 #include "io/meshopt/decimate.h"
@@ -57,6 +58,9 @@ const char* to_string(DistanceQuery q) {
 
 void validate(const PipelineOptions& o) {
     const ScanConvertOptions& s = o.scan;
+    if (o.sharpen && o.smoothing) bad_option("sharpen", "true", "false with smoothing (it sharpens a re-meshing)");
+    if (o.sharpen && o.connectivity == Connectivity::Keep)
+        bad_option("sharpen", "true", "false with connectivity keep (it sharpens a re-meshing)");
     if (!(s.voxel_size >= 0) || !std::isfinite(s.voxel_size)) bad_option("scan.voxel_size", str(s.voxel_size), ">= 0");
     if (s.voxel_size == 0 && s.resolution < 0)
         bad_option("scan.resolution", str(s.resolution), ">= 1, or 0 (automatic)");
@@ -202,7 +206,56 @@ Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, Pipelin
 }
 
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
+    return volume_to_mesh(v, o, report, progress, nullptr);
+}
+
+namespace {
+
+/// Gives the vertices of every face that intersects another face their position in `before`, until no face
+/// does (an extraction is free of self-intersections, so this ends). The number of vertices given back; -1
+/// without CGAL, which finds them.
+long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before) {
+#ifdef NORMALFLOW_HAS_CGAL
+    long long restored = 0;
+    std::vector<char> done(m.positions.size(), 0), changed(m.positions.size(), 0), marked(m.triangles.size());
+    // first every face with a moved vertex (the extraction has no intersecting faces), then only the faces whose
+    // vertices the last round gave back: any other pair was checked with the positions it still has
+    for (std::size_t i = 0; i < m.positions.size(); ++i) changed[i] = m.positions[i] != before[i];
+    for (int round = 0; round < 64; ++round) {
+        for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+            const Tri& t = m.triangles[f];
+            marked[f] = changed[t[0]] || changed[t[1]] || changed[t[2]];
+        }
+        const auto pairs = self_intersecting_pairs(m, &marked);
+        if (pairs.empty()) break;
+        std::fill(changed.begin(), changed.end(), 0);
+        for (const auto& [a, b] : pairs)
+            for (const std::uint32_t f : {a, b})
+                for (const std::uint32_t vtx : m.triangles[f])
+                    if (m.positions[vtx] != before[vtx]) {
+                        m.positions[vtx] = before[vtx];
+                        changed[vtx] = 1;
+                        restored += !done[vtx];
+                        done[vtx] = 1;
+                    }
+    }
+    return restored;
+#else
+    (void)m;
+    (void)before;
+    return -1;
+#endif
+}
+
+}  // namespace
+
+Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* report, Progress* progress,
+                    const Mesh* reference) {
     if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
+    if (o.sharpen && o.smoothing)
+        throw InvalidInput(
+            "sharpen applies to a re-meshing without smoothing (the smoothed surface's creases are its own)");
+    if (o.sharpen && !reference) throw InvalidInput("sharpen needs the mesh the volume was made from");
     if (!(o.max_error >= 0) || !std::isfinite(o.max_error)) bad_option("max_error", str(o.max_error), ">= 0");
     PipelineReport local;
     PipelineReport& r = report ? *report : local;
@@ -217,16 +270,30 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
                 "shrink away); raise --resolution or lower --iterations");
         throw InvalidInput("the volume holds no surface (every sample has the same sign)");
     }
+    if (o.sharpen) {
+        detail::begin(progress, "sharpen");
+        const std::vector<Vec3f> extracted = m.positions;
+        const auto q = make_bvh_query(*reference);
+        SharpenOptions so;
+        so.max_move = kSharpenMaxMoveVoxels * v.grid.voxel_size;
+        so.threads = o.scan.threads;
+        r.sharpen = sharpen_mesh(m, mesh_probe(*reference, *q), so, progress);
+        r.sharpen_restored = restore_self_intersections(m, extracted);
+        if (r.sharpen_restored < 0)
+            r.warnings.push_back("sharpened without the self-intersection check (a build without CGAL)");
+        r.sharpened = true;
+        r.seconds.extract += clock.lap();
+    }
     if (o.target_faces > 0 || o.max_error > 0) {
         detail::begin(progress, "decimate");
         // Hermite data: the field's normal at each vertex, so that the quadrics see the surface the
         // volume holds rather than the extraction's one-voxel bevels at creases (benchmarks/README.md,
-        // "Sharp extraction").
+        // "Sharp extraction"); a sharpened surface's own faces lie on the input's planes already.
         set_volume_normals(m, v);
         r.decimate = decimate_mesh(m, {.target_faces = o.target_faces,
                                        .max_error = o.max_error,
                                        .decimator = o.decimator,
-                                       .tangent_planes = true});
+                                       .tangent_planes = !o.sharpen});
         r.decimated = true;
         append(r.warnings, r.decimate.warnings);
         r.seconds.decimate = clock.lap();
@@ -461,7 +528,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.seconds.total += seconds;
     }
     if (!keep) {
-        result.mesh = volume_to_mesh(v, o, &r, progress);
+        result.mesh = volume_to_mesh(v, o, &r, progress, &m);
         std::unique_ptr<ClosestTriangleQuery> q;
         if (open && !o.closed) {
             Stopwatch trim_clock;

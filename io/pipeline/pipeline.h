@@ -15,6 +15,7 @@
 #include "core/volume.h"
 #include "extract/extract_surface.h"
 #include "extract/fit_mesh.h"
+#include "extract/sharpen.h"
 #include "extract/trim_to_footprint.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
@@ -70,6 +71,10 @@ const char* to_string(Connectivity c);
 /// (heavy noise that tangled the triangles: fandisk_n0.7, fandisk_n6, trimstar_n0.5, vaselion) beyond
 /// 2.86°; the one exception, twelve_imp0.5 (1.66°), is kept at a cost of 0.18°.
 inline constexpr double kAutoKeepFitAngleDeg = 2.5;
+
+/// PipelineOptions::sharpen: no vertex moves farther than this many voxels (the bevel marching tetrahedra cuts is
+/// about one voxel wide; two let vertices cross and meet: fandisk at 256, benchmarks/README.md "Sharp re-meshing").
+inline constexpr double kSharpenMaxMoveVoxels = 1.0;
 
 /// Which decimator target_faces runs (decimate_mesh).
 enum class Decimator {
@@ -152,6 +157,12 @@ struct PipelineOptions {
     double max_error = 0;
     /// The decimator target_faces and max_error run.
     Decimator decimator = Decimator::Auto;
+    /// A re-meshing without smoothing (smoothing = false, the surface re-meshed): move the extracted vertices onto
+    /// the input's creases and corners (sharpen_mesh, the input as the reference) before any decimation, which then
+    /// keeps them (face planes, not the field's rounded normals). Faces a move made intersect get their vertices
+    /// back (builds with CGAL). Refused with smoothing: the smoothed surface's creases are its own, and sharpening
+    /// towards its volume was measured worse (benchmarks/README.md, "Sharp re-meshing").
+    bool sharpen = false;
     /// Refuse, before anything big is allocated, a run estimated to need more than this many
     /// bytes; 0: the memory the system has available now (MemAvailable).
     std::size_t max_memory_bytes = 0;
@@ -184,8 +195,13 @@ struct PipelineReport {
     FitReport fit;                   ///< valid when fitted
     bool trimmed = false;            ///< an open input's re-meshed result was trimmed to its footprint
     TrimReport trim;                 ///< valid when trimmed
-    bool decimated = false;          ///< decimation ran (target_faces > 0)
-    DecimationReport decimate;       ///< valid when decimated
+    bool sharpened = false;          ///< the extraction was sharpened to the input (options.sharpen)
+    SharpenReport sharpen;           ///< valid when sharpened
+    /// Sharpened: vertices given back their extracted position because their faces intersected others; -1: not
+    /// checked (a build without CGAL).
+    long long sharpen_restored = 0;
+    bool decimated = false;     ///< decimation ran (target_faces > 0)
+    DecimationReport decimate;  ///< valid when decimated
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order
@@ -234,6 +250,10 @@ Volume mesh_to_volume(const Mesh& m, const PipelineOptions& options = {}, Pipeli
 /// \throw InvalidInput if the volume holds no surface.
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options = {}, PipelineReport* report = nullptr,
                     Progress* progress = nullptr);
+/// volume_to_mesh with options.sharpen: the extraction sharpened to reference (the mesh v was made from) before
+/// the decimation. reference is not used without options.sharpen.
+Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options, PipelineReport* report, Progress* progress,
+                    const Mesh* reference);
 
 /// The model length unit smooth_volume_input gives the engine for a volume that did not come from a mesh (a
 /// volume file), in voxels of its grid: the scale of a scan's noise and of a binary mask's staircase. The

@@ -183,6 +183,17 @@ Json to_json(const PipelineReport& r) {
         j.set("fit", f);
     }
     if (!r.connectivity_kept) j.set("extract", to_json(r.extract));
+    if (r.sharpened) {
+        const SharpenReport& h = r.sharpen;
+        j.set("sharpen", Json::object()
+                             .set("vertices", h.vertices)
+                             .set("moved", h.moved)
+                             .set("refused", h.refused)
+                             .set("restored", r.sharpen_restored)
+                             .set("mean_move", h.mean_move)
+                             .set("max_move", h.max_move)
+                             .set("seconds", h.seconds));
+    }
     if (r.trimmed) {
         Json t = Json::object();
         t.set("faces_removed", r.trim.faces_removed).set("components_removed", r.trim.components_removed);
@@ -245,6 +256,7 @@ Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double v
         .set("fit_steps", o.fit.vertex_steps)
         .set("boundary_rings", o.fit.boundary_rings)
         .set("iso", o.extract.iso)
+        .set("sharpen", o.sharpen)
         .set("target_faces", o.target_faces)
         .set("max_error", o.max_error)
         .set("decimator", to_string(o.decimator));

@@ -50,7 +50,8 @@ Json to_json(const MeshReport& r);
 Json to_json(const DecimationReport& r);
 
 /// repair (when repaired), distance, memory_estimate_bytes, voxelize (the scan report plus
-/// band_half_width as run), smooth (when smoothed), extract, decimate (when decimated),
+/// band_half_width as run), smooth (when smoothed), extract, sharpen {vertices, moved, refused, restored,
+/// mean_move, max_move, seconds} (when sharpened), decimate (when decimated),
 /// seconds {repair, voxelize, smooth, extract, decimate, total}, peak_memory_bytes, warnings.
 Json to_json(const PipelineReport& r);
 
@@ -61,7 +62,7 @@ Json to_json(const PipelineReport& r);
 /// iterations, normal_steps, length_scale, sigma_spatial, sigma_range, tv_lambda, mu, alpha, presmooth,
 /// mu_robust, normal_dt, refit_steps, refit_dt, refit_tolerance, refit_super_steps, extend_by_gather,
 /// all_samples, preserve_volume, second_order, active_band, connectivity, closed, fit_to_normal_map,
-/// projection_steps, relax_steps, fit_steps, boundary_rings, iso, target_faces, max_error, decimator.
+/// projection_steps, relax_steps, fit_steps, boundary_rings, iso, sharpen, target_faces, max_error, decimator.
 /// Without o.smoothing (voxelize, extract) the engine's keys are left out.
 /// voxel_size: the grid's (a scan conversion's, r.scan.grid; a volume input's own).
 Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double voxel_size);

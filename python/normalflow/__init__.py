@@ -24,7 +24,7 @@ from . import _normalflow as _nf
 from ._normalflow import (Cancelled, InvalidInput, IoError, Mesh, NumericalError, OutOfMemory, Volume,  # noqa: F401
                           __version__)
 
-__all__ = ["Mesh", "Volume", "read_mesh", "write_mesh", "read_volume", "image_to_volume", "smooth", "voxelize",
+__all__ = ["Mesh", "Volume", "read_mesh", "write_mesh", "read_volume", "image_to_volume", "smooth", "remesh", "voxelize",
            "extract", "compare", "noise", "taubin", "options", "InvalidInput", "IoError", "NumericalError",
            "OutOfMemory", "Cancelled", "__version__"]
 
@@ -79,7 +79,7 @@ def _call(fn, *args):
 
 
 def options(command="smooth"):
-    """The keyword arguments of smooth, voxelize or extract, with their help (the command line's)."""
+    """The keyword arguments of smooth, remesh, voxelize or extract, with their help (the command line's)."""
     return _nf.flag_help(command)
 
 
@@ -118,6 +118,14 @@ def smooth(mesh, faces=None, *, progress=None, **options):
         out, report = _call(_nf.smooth_volume, mesh, _flags("smooth", options), progress, not want_volume)
     else:
         out, report = _call(_nf.smooth, _mesh(mesh, faces), _flags("smooth", options), progress)
+    return out, _json.loads(report)
+
+
+def remesh(mesh, faces=None, *, progress=None, **options):
+    """A closed manifold re-meshing of any mesh through its volume (normalflow remesh): the extraction's vertices
+    moved onto the input's creases and corners (sharpen=False keeps them on the grid), decimated with target_faces
+    or max_error. Returns (Mesh, report dict)."""
+    out, report = _call(_nf.remesh, _mesh(mesh, faces), _flags("remesh", options), progress)
     return out, _json.loads(report)
 
 

@@ -197,7 +197,7 @@ std::vector<std::string> flag_names(const Flags& f) {
     return names;
 }
 
-enum class Command { Smooth, Voxelize, Extract };
+enum class Command { Smooth, Voxelize, Extract, Remesh };
 
 std::unique_ptr<Flags> flags_of(Command c) {
     auto f = std::make_unique<Flags>();
@@ -207,6 +207,7 @@ std::unique_ptr<Flags> flags_of(Command c) {
         app->add_option("--band", f->pipeline.scan.half_width, "band half-width in voxels")
             ->check(CLI::Range(1.0, 64.0));
     if (c == Command::Smooth) cli::add_smooth_options(app, f->pipeline);
+    if (c == Command::Remesh) cli::add_remesh_options(app, f->pipeline);
     if (c != Command::Voxelize) cli::add_decimation_options(app, f->pipeline);
     return f;
 }
@@ -215,6 +216,7 @@ Command command_of(const std::string& name) {
     if (name == "smooth") return Command::Smooth;
     if (name == "voxelize") return Command::Voxelize;
     if (name == "extract") return Command::Extract;
+    if (name == "remesh") return Command::Remesh;
     throw InvalidInput("no command " + name);
 }
 
@@ -439,6 +441,24 @@ PYBIND11_MODULE(_normalflow, m) {
             return mesh_and_report(std::move(r.mesh), j);
         },
         py::arg("volume"), py::arg("args"), py::arg("progress"), py::arg("want_mesh"));
+
+    m.def(
+        "remesh",
+        [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
+            PipelineOptions opt = options_of(Command::Remesh, args);
+            opt.smoothing = false;
+            opt.connectivity = Connectivity::Remesh;
+            PyProgress progress(std::move(callback));
+            PipelineResult r = released(progress, [&] {
+                validate(opt);
+                return smooth_mesh(mesh, opt, &progress);
+            });
+            Json j = to_json(r.report);
+            j.set("parameters", parameters_json(opt, r.report, r.report.scan.grid.voxel_size))
+                .set("version", version());
+            return mesh_and_report(std::move(r.mesh), j);
+        },
+        py::arg("mesh"), py::arg("args"), py::arg("progress"));
 
     m.def(
         "voxelize",

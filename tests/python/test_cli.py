@@ -62,3 +62,21 @@ def test_json_records_every_parameter_and_the_version(cli, part, tmp_path):
             continue
         key = flag[2:].removeprefix("no-").replace("-", "_")
         assert key in p, f"{flag} is not recorded in --json's parameters"
+
+
+def test_remesh_keeps_creases_and_python_gives_the_tools_result(cli, data, tmp_path):
+    gt = data / "pairs_gnf" / "block_gt.ply"
+    out = tmp_path / "sharp.ply"
+    p = subprocess.run([cli, "remesh", str(gt), str(out), "--resolution", "64", "--json"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    report = json.loads(p.stdout.strip().splitlines()[-1])
+    assert report["parameters"]["sharpen"] is True and report["sharpen"]["moved"] > 0
+    mesh, rep = nf.remesh(nf.read_mesh(gt), resolution=64)
+    assert (mesh.vertices == nf.read_mesh(out).vertices).all() and rep["sharpen"]["moved"] == report["sharpen"]["moved"]
+    plain, _ = nf.remesh(nf.read_mesh(gt), resolution=64, sharpen=False)
+    reference = nf.read_mesh(gt)
+    sharp_angle = nf.compare(reference, mesh)["candidates"][0]["mean_normal_angle_deg"]
+    plain_angle = nf.compare(reference, plain)["candidates"][0]["mean_normal_angle_deg"]
+    assert sharp_angle < 0.6 * plain_angle, (sharp_angle, plain_angle)
+    info = mesh.report()
+    assert info["closed"] and info["manifold"]
