@@ -84,7 +84,7 @@ SharpenReport sharpen_mesh(Mesh& m, const SurfaceProbe& probe, const SharpenOpti
             for (std::uint32_t v : m.triangles[f]) ring[fill[v]++] = std::uint32_t(f);
     }
 
-    // each face's normal (area vector) at the start: no face is let turn from it by 90° or shrink to nothing
+    // each face's normal (area vector) at the start: no face may turn from it by 120° or shrink to nothing
     std::vector<Vec3d> start_normal(nf);
     for (std::size_t f = 0; f < nf; ++f) {
         const Tri& t = m.triangles[f];
