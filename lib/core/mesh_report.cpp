@@ -6,6 +6,8 @@
 #include <numeric>
 #include <string>
 
+#include <tbb/parallel_sort.h>
+
 #include "core/errors.h"
 
 namespace normalflow {
@@ -26,7 +28,7 @@ std::size_t weld_map(const std::vector<Vec3f>& p, std::vector<std::uint32_t>& ol
     };
     std::vector<std::uint32_t> order(n);
     std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), less);
+    tbb::parallel_sort(order.begin(), order.end(), less);  // a strict order: the same on any thread count
     // rep[i] = smallest original index with the same position (the first in each sorted run).
     std::vector<std::uint32_t> rep(n);
     for (std::size_t k = 0; k < n; ++k) {
@@ -138,8 +140,8 @@ MeshReport mesh_report(const Mesh& m) {
             std::sort(s.begin(), s.end());
             keys.push_back({s, static_cast<std::uint32_t>(f)});
         }
-        std::sort(keys.begin(), keys.end(),
-                  [](const Key& a, const Key& b) { return a.s < b.s || (a.s == b.s && a.f < b.f); });
+        tbb::parallel_sort(keys.begin(), keys.end(),
+                           [](const Key& a, const Key& b) { return a.s < b.s || (a.s == b.s && a.f < b.f); });
         for (std::size_t k = 1; k < keys.size(); ++k)
             if (keys[k].s == keys[k - 1].s) ++r.duplicate_faces;
     }
@@ -160,7 +162,7 @@ MeshReport mesh_report(const Mesh& m) {
             const std::uint64_t key = (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b);
             he.push_back({key, static_cast<std::uint32_t>(f), k, static_cast<std::uint8_t>(a > b)});
         }
-    std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
+    tbb::parallel_sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
         return x.key < y.key || (x.key == y.key && x.face < y.face) ||
                (x.key == y.key && x.face == y.face && x.corner < y.corner);
     });

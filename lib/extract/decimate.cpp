@@ -1,15 +1,18 @@
 #include "extract/decimate.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <numbers>
 #include <string>
 #include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "core/errors.h"
 #include "extract/quadric.h"
@@ -29,22 +32,25 @@ constexpr double kLengthWeight = 1e-4;
 /// eigenvalue: small enough to leave a corner where its planes meet, and it picks the point of a
 /// crease line or a flat patch nearest to the midpoint, where the quadric alone has no single minimum.
 constexpr double kRegularisation = 1e-3;
-/// Each pass collapses, cheapest first, among the cheaper half of the edges, those whose two ends and
-/// their neighbours no collapse of the pass has touched (so that each cost is still exact).
-constexpr double kPassFraction = 0.5;
+/// Each pass considers the cheaper part of the open edges, in order of cost (see select).
+constexpr double kPassFraction = 0.25;
 /// With tangent planes: eigenvalues of a quadric below this fraction of its largest count as zero.
 /// Fandisk extracted at 256 and decimated by tangent planes within 0.03 voxel, mean normal error against
 /// the true fandisk: 0.02 0.83°, 0.1 0.89°, 0.3 0.90°; the regularised solve (minimiser_near) 0.84°.
 constexpr double kTruncation = 0.02;
 
-struct Candidate {
-    double cost;
-    std::uint32_t u, v;
-    bool operator<(const Candidate& o) const {
-        if (cost != o.cost) return cost < o.cost;
-        if (u != o.u) return u < o.u;
-        return v < o.v;
-    }
+/// A slot per face corner: the edge from that corner to the next. Its candidate key is the collapse's
+/// cost as float bits (a non-negative float orders as its bits do) over the slot index, so that sorting
+/// the keys orders by cost with ties broken by the slot: deterministic, and 8 bytes to sort.
+constexpr std::uint64_t kNoCandidate = ~std::uint64_t(0);
+/// A slot's state: a candidate; refused by the checks (until its neighbourhood changes); or over
+/// QemOptions::max_error (until its ends move).
+constexpr std::uint8_t kOpen = 0, kRefused = 1, kOverBound = 2;
+
+/// Where the merged vertex of a slot's edge goes, and the quadric error there, as costed.
+struct Placement {
+    Vec3f x;
+    float error;
 };
 
 double quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, Vec3d* normal) {
@@ -58,55 +64,78 @@ class QemDecimation {
 public:
     QemDecimation(Mesh& m, const QemOptions& o) : m_(m), opt_(o) {
         const std::size_t nv = m.positions.size(), nf = m.triangles.size();
+        tris_ = m.triangles;
         pos_.resize(nv);
-        for (std::size_t i = 0; i < nv; ++i) pos_[i] = Vec3d(m.positions[i]);
-        q_.assign(nv, {});
-        vf_.assign(nv, {});
         alive_v_.assign(nv, 1);
         locked_.assign(nv, 0);
         alive_f_.assign(nf, 1);
-        tris_ = m.triangles;
-        const bool tangent = o.tangent_planes;  // decimate_mesh_qem checked that m has a normal per vertex
-        std::vector<double> area(tangent ? nv : 0, 0.0);
-        for (std::uint32_t f = 0; f < nf; ++f) {
-            const Tri& t = tris_[f];
-            const Vec3d a = pos_[t[0]], b = pos_[t[1]], c = pos_[t[2]];
-            const Vec3d n = cross(b - a, c - a);
-            const double len = norm(n);
-            if (len > 0) {
-                const Vec3d u = n / len;
-                for (int k = 0; k < 3; ++k) {
-                    if (tangent && squared_norm(Vec3d(m.normals[t[k]])) > 0)
-                        area[t[k]] += len / 6.0;
-                    else
-                        q_[t[k]].add_plane(u, -dot(u, a), 0.5 * len);
-                }
-            }
-            for (int k = 0; k < 3; ++k) vf_[t[k]].push_back(f);
-        }
-        for (std::size_t v = 0; v < area.size(); ++v)
-            if (area[v] > 0) {
-                const Vec3d u = normalized(Vec3d(m.normals[v]));
-                q_[v].add_plane(u, -dot(u, pos_[v]), area[v]);
-            }
-        // Edges, with the number of faces on each: border and non-manifold edges lock their ends.
-        std::vector<std::uint64_t> keys;
-        keys.reserve(3 * nf);
+        // The faces of each vertex, in face order (a counting sort).
+        std::vector<std::uint32_t> start(nv + 1, 0), list(3 * nf);
         for (const Tri& t : tris_)
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-                if (a != b) keys.push_back(std::uint64_t(std::min(a, b)) << 32 | std::max(a, b));
-            }
-        std::sort(keys.begin(), keys.end());
-        for (std::size_t i = 0; i < keys.size();) {
-            std::size_t j = i;
-            while (j < keys.size() && keys[j] == keys[i]) ++j;
-            const auto a = std::uint32_t(keys[i] >> 32), b = std::uint32_t(keys[i] & 0xffffffffu);
-            if (j - i != 2) locked_[a] = locked_[b] = 1;
-            i = j;
+            for (const std::uint32_t v : t) ++start[v + 1];
+        for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+        {
+            std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+            for (std::uint32_t f = 0; f < nf; ++f)
+                for (const std::uint32_t v : tris_[f]) list[next[v]++] = f;
         }
-        for (const Tri& t : tris_)  // a face with a repeated vertex: leave its vertices alone
-            if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) locked_[t[0]] = locked_[t[1]] = locked_[t[2]] = 1;
+        // Each face's plane: unit normal and area (zero for a degenerate face).
+        std::vector<Vec3d> unit(nf);
+        std::vector<double> farea(nf);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 4096), [&](const auto& r) {
+            for (std::size_t f = r.begin(); f != r.end(); ++f) {
+                const Tri& t = tris_[f];
+                const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
+                const Vec3d n = cross(b - a, c - a);
+                const double len = norm(n);
+                unit[f] = len > 0 ? n / len : Vec3d{};
+                farea[f] = 0.5 * len;
+            }
+        });
+        q_.assign(nv, {});
+        vf_.assign(nv, {});
+        const bool tangent = o.tangent_planes;  // decimate_mesh_qem checked that m has a normal per vertex
+        // Per vertex, in parallel (each writes its own entries only): its quadric, summed over its faces
+        // in face order; its face list; and whether it is locked: on a border or non-manifold edge (an
+        // edge with other than two faces) or on a face with a repeated vertex.
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 1024), [&](const auto& r) {
+            std::vector<std::pair<std::uint32_t, int>> edges;  // (neighbour, faces on the edge to it)
+            for (std::size_t v = r.begin(); v != r.end(); ++v) {
+                pos_[v] = Vec3d(m.positions[v]);
+                const bool own = tangent && squared_norm(Vec3d(m.normals[v])) > 0;
+                double area = 0.0;
+                edges.clear();
+                for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+                    const std::uint32_t f = list[i];
+                    const Tri& t = tris_[f];
+                    if (farea[f] > 0) {
+                        if (own)
+                            area += farea[f] / 3.0;
+                        else
+                            q_[v].add_plane(unit[f], -dot(unit[f], Vec3d(m.positions[t[0]])), farea[f]);
+                    }
+                    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+                        locked_[v] = 1;
+                        continue;
+                    }
+                    for (const std::uint32_t w : t) {
+                        if (w == v) continue;
+                        auto e = std::find_if(edges.begin(), edges.end(), [&](const auto& x) { return x.first == w; });
+                        if (e == edges.end())
+                            edges.push_back({w, 1});
+                        else
+                            ++e->second;
+                    }
+                }
+                for (const auto& e : edges)
+                    if (e.second != 2) locked_[v] = 1;
+                if (area > 0) {
+                    const Vec3d u = normalized(Vec3d(m.normals[v]));
+                    q_[v].add_plane(u, -dot(u, pos_[v]), area);
+                }
+                vf_[v].assign(list.begin() + start[v], list.begin() + start[v + 1]);
+            }
+        });
         faces_ = nf;
         cos_max_ = std::cos(opt_.max_normal_change_deg * std::numbers::pi / 180.0);
         max_error2_ = opt_.max_error * opt_.max_error;
@@ -116,55 +145,39 @@ public:
         QemReport rep;
         rep.faces_before = m_.triangles.size();
         rep.vertices_before = m_.positions.size();
-        std::vector<Candidate> cand;
-        std::vector<std::uint8_t> touched(pos_.size(), 0);
+        const std::size_t nv = pos_.size();
+        std::vector<std::uint64_t> cand;
+        std::vector<std::uint8_t> taken(nv);
+        std::vector<std::uint32_t> selected;
+        std::vector<double> made_error;
+        // At first every edge needs costing.
+        dirty_.assign(nv, 1);
+        changed_.assign(nv, 1);
         while (faces_ > opt_.target_faces) {
             if (2 * faces_ < tris_.size()) compact_faces();  // later passes cost what is left, not what was
-            // The edges of the alive faces, each once (from the face where it runs low → high, in a
-            // consistently oriented mesh; a border or non-manifold edge has locked ends and is
-            // skipped), with their costs, computed in parallel into fixed slots (3 per face) and then
-            // compacted in face order: the same list on any number of threads.
-            slots_.resize(3 * tris_.size());
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tris_.size(), 4096), [&](const auto& r) {
-                for (std::size_t f = r.begin(); f != r.end(); ++f)
-                    for (int k = 0; k < 3; ++k) {
-                        const std::uint32_t a = tris_[f][k], b = tris_[f][(k + 1) % 3];
-                        slots_[3 * f + std::size_t(k)] = alive_f_[f] && a < b && !(locked_[a] && locked_[b])
-                                                             ? candidate(a, b)
-                                                             : Candidate{-1.0, 0, 0};
-                    }
+            cost_edges();
+            std::fill(dirty_.begin(), dirty_.end(), 0);
+            std::fill(changed_.begin(), changed_.end(), 0);
+            select(cand, taken, selected);
+            if (selected.empty()) break;  // nothing left that passes the checks
+            // Near the target, only the cheapest of them (each collapse removes two faces).
+            const std::size_t room = (faces_ - opt_.target_faces + 1) / 2;
+            if (selected.size() > room) selected.resize(room);  // in order of cost
+            // The selected collapses share no vertex and no face, and none reads what another writes:
+            // they are made in parallel, each the same on any number of threads.
+            made_error.assign(selected.size(), -1.0);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, selected.size(), 256), [&](const auto& r) {
+                Scratch sc;
+                for (std::size_t i = r.begin(); i != r.end(); ++i) made_error[i] = try_collapse(selected[i], sc);
             });
-            cand.clear();
-            for (const Candidate& c : slots_)
-                if (c.cost >= 0) cand.push_back(c);
-            if (cand.empty()) break;
-            // the cheaper part, in order (ties broken by the vertex indices: deterministic)
-            const std::size_t half = std::max<std::size_t>(1, std::size_t(double(cand.size()) * kPassFraction));
-            const auto cut = cand.begin() + std::ptrdiff_t(half);
-            std::nth_element(cand.begin(), cut - 1, cand.end(), std::less<Candidate>());
-            std::sort(cand.begin(), cut, std::less<Candidate>());
-            std::fill(touched.begin(), touched.end(), 0);
             std::size_t made = 0;
-            for (auto it = cand.begin(); it != cut && faces_ > opt_.target_faces; ++it) {
-                const Candidate& c = *it;
-                if (!alive_v_[c.u] || !alive_v_[c.v] || touched[c.u] || touched[c.v]) continue;
-                std::uint32_t keep = c.u, gone = c.v;
-                Vec3d x;
-                const double error = placement(keep, gone, x);
-                if (max_error2_ > 0 && error > max_error2_ * (q_[keep].w + q_[gone].w)) continue;
-                // keep the endpoint nearer to x (a locked one is x itself): its attributes are closer
-                if (locked_[gone] || (!locked_[keep] && squared_norm(pos_[gone] - x) < squared_norm(pos_[keep] - x)))
-                    std::swap(keep, gone);
-                if (!allowed(keep, gone, x)) continue;
-                rep.max_error = std::max(rep.max_error, std::sqrt(error / std::max(q_[keep].w + q_[gone].w, 1e-300)));
-                collapse(keep, gone, x);
-                // the costs of every edge at keep and at its neighbours changed: not again this pass
-                touched[keep] = 1;
-                for (std::uint32_t w : nk_) touched[w] = 1;
-                ++made;
-            }
+            for (std::size_t i = 0; i < selected.size(); ++i)
+                if (made_error[i] >= 0) {
+                    ++made;
+                    rep.max_error = std::max(rep.max_error, made_error[i]);
+                }
+            faces_ -= 2 * made;
             rep.collapses += made;
-            if (made == 0) break;  // nothing left that passes the checks
         }
         write_back();
         rep.faces_after = m_.triangles.size();
@@ -174,6 +187,118 @@ public:
     }
 
 private:
+    /// Per-thread scratch of a collapse's checks.
+    struct Scratch {
+        std::vector<std::uint32_t> shared, nk, ng, common;
+    };
+
+    /// Costs the edges of the alive faces into their slots (3 per face), each edge once (from the face
+    /// where it runs low → high, in a consistently oriented mesh; a border or non-manifold edge has
+    /// locked ends and is skipped). Only edges at a dirty vertex are costed again; a refused edge is
+    /// reconsidered once its neighbourhood changed. In parallel, into fixed slots: the same keys on any
+    /// number of threads.
+    void cost_edges() {
+        keys_.resize(3 * tris_.size(), kNoCandidate);
+        place_.resize(3 * tris_.size());
+        state_.resize(3 * tris_.size(), kOpen);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tris_.size(), 4096), [&](const auto& r) {
+            for (std::size_t f = r.begin(); f != r.end(); ++f)
+                for (int k = 0; k < 3; ++k) {
+                    const std::size_t slot = 3 * f + std::size_t(k);
+                    const std::uint32_t a = tris_[f][k], b = tris_[f][(k + 1) % 3];
+                    if (!alive_f_[f] || a >= b || (locked_[a] && locked_[b])) {
+                        keys_[slot] = kNoCandidate;
+                    } else if (dirty_[a] || dirty_[b] || keys_[slot] == kNoCandidate) {
+                        keys_[slot] = cost(a, b, slot);
+                        state_[slot] = max_error2_ > 0 && double(place_[slot].error) > max_error2_ * (q_[a].w + q_[b].w)
+                                           ? kOverBound
+                                           : kOpen;
+                    } else if (state_[slot] == kRefused && (changed_[a] || changed_[b])) {
+                        state_[slot] = kOpen;
+                    }
+                }
+        });
+    }
+
+    /// The collapses of a pass, cheapest first: among the cheaper part of the open edges, in order of
+    /// cost, each edge neither of whose ends is at or next to an end of an edge taken before it. So no
+    /// two of them share a vertex or a face or read what another's collapse writes.
+    void select(std::vector<std::uint64_t>& cand, std::vector<std::uint8_t>& taken,
+                std::vector<std::uint32_t>& selected) const {
+        // The cheaper part: a histogram of the open keys' top 16 bits (the cost's sign, exponent and 7
+        // bits of mantissa) in fixed blocks gives the bucket below which about kPassFraction of them lie;
+        // the keys up to it are gathered in slot order. Integer counts: the same on any number of threads.
+        constexpr std::size_t kBlocks = 16, kBuckets = std::size_t(1) << 16;
+        const std::size_t n = keys_.size(), per = (n + kBlocks - 1) / kBlocks;
+        hist_.assign(kBlocks * kBuckets, 0);
+        const auto open = [&](std::size_t slot) { return keys_[slot] != kNoCandidate && state_[slot] == kOpen; };
+        tbb::parallel_for(std::size_t(0), kBlocks, [&](std::size_t b) {
+            std::uint32_t* h = hist_.data() + b * kBuckets;
+            for (std::size_t slot = b * per; slot < std::min(n, (b + 1) * per); ++slot)
+                if (open(slot)) ++h[keys_[slot] >> 48];
+        });
+        std::size_t total = 0;
+        for (const std::uint32_t c : hist_) total += c;
+        selected.clear();
+        if (total == 0) return;
+        const std::size_t part = std::max<std::size_t>(1, std::size_t(double(total) * kPassFraction));
+        std::size_t below = 0, bucket = 0;
+        for (; bucket < kBuckets; ++bucket) {
+            for (std::size_t b = 0; b < kBlocks; ++b) below += hist_[b * kBuckets + bucket];
+            if (below >= part) break;
+        }
+        std::size_t offset[kBlocks + 1] = {};
+        for (std::size_t b = 0; b < kBlocks; ++b) {
+            std::size_t c = 0;
+            for (std::size_t k = 0; k <= bucket; ++k) c += hist_[b * kBuckets + k];
+            offset[b + 1] = offset[b] + c;
+        }
+        cand.resize(below);
+        tbb::parallel_for(std::size_t(0), kBlocks, [&](std::size_t b) {
+            std::size_t w = offset[b];
+            for (std::size_t slot = b * per; slot < std::min(n, (b + 1) * per); ++slot)
+                if (open(slot) && (keys_[slot] >> 48) <= bucket) cand[w++] = keys_[slot];
+        });
+        tbb::parallel_sort(cand.begin(), cand.end());  // a strict order (ties broken by the slot): deterministic
+        std::fill(taken.begin(), taken.end(), 0);
+        for (const std::uint64_t key : cand) {
+            const auto slot = std::uint32_t(key & 0xffffffffu);
+            const Tri& t = tris_[slot / 3];
+            const std::uint32_t ends[2] = {t[slot % 3], t[(slot % 3 + 1) % 3]};
+            if (taken[ends[0]] || taken[ends[1]]) continue;
+            selected.push_back(slot);
+            for (const std::uint32_t v : ends)
+                for (const std::uint32_t f : vf_[v])
+                    if (alive_f_[f])
+                        for (const std::uint32_t w : tris_[f]) taken[w] = 1;
+        }
+    }
+
+    /// Collapses the edge in `slot` if the checks allow it: the merged vertex's quadric error as a
+    /// distance, or -1 (the edge marked refused) if they do not.
+    double try_collapse(std::uint32_t slot, Scratch& sc) {
+        const std::size_t f = slot / 3;
+        const int k = int(slot % 3);
+        std::uint32_t keep = tris_[f][k], gone = tris_[f][(k + 1) % 3];
+        const Vec3d x(place_[slot].x);
+        // keep the endpoint nearer to x (a locked one is x itself): its attributes are closer
+        if (locked_[gone] || (!locked_[keep] && squared_norm(pos_[gone] - x) < squared_norm(pos_[keep] - x)))
+            std::swap(keep, gone);
+        if (!allowed(keep, gone, x, sc)) {
+            state_[slot] = kRefused;
+            return -1.0;
+        }
+        const double w = q_[keep].w + q_[gone].w;
+        collapse(keep, gone, x, sc);
+        dirty_[keep] = 1;
+        // The edges at the merged vertex and its neighbours may pass the checks now. Two collapses of a
+        // pass can share a neighbour: the flag is set atomically.
+        for (const std::uint32_t f : faces_of(keep))
+            for (const std::uint32_t v : tris_[f])
+                std::atomic_ref<std::uint8_t>(changed_[v]).store(1, std::memory_order_relaxed);
+        return std::sqrt(double(place_[slot].error) / std::max(w, 1e-300));
+    }
+
     /// Where the merged vertex of edge (a, b) goes, and its quadric error there.
     double placement(std::uint32_t a, std::uint32_t b, Vec3d& x) const {
         Quadric q = q_[a];
@@ -206,13 +331,20 @@ private:
         return best;
     }
 
-    Candidate candidate(std::uint32_t a, std::uint32_t b) const {
+    /// The candidate key of the collapse of edge (a, b) in `slot`, its placement stored in place_[slot].
+    std::uint64_t cost(std::uint32_t a, std::uint32_t b, std::size_t slot) {
         Vec3d x;
-        const double cost = placement(a, b, x);
+        const double error = placement(a, b, x);
+        // Positions stay floats (they are written back as such), so the costed placement is the one made.
+        const Vec3f xf(x);
+        place_[slot] = {xf, float(error)};
         // Among collapses of equal error (a flat patch: all zero) the shorter edge first, so that a
         // flat region is decimated evenly instead of into fans of slivers around a few vertices.
         const double shape = kLengthWeight * (q_[a].w + q_[b].w) * squared_norm(pos_[a] - pos_[b]);
-        return {cost + shape, a, b};
+        const float c = float(error + shape);
+        std::uint32_t bits;
+        std::memcpy(&bits, &c, sizeof bits);
+        return std::uint64_t(bits) << 32 | std::uint64_t(slot);
     }
 
     /// The alive faces of v (purging dead ones from its list).
@@ -233,31 +365,31 @@ private:
     }
 
     /// Whether collapsing `gone` into `keep` at x keeps the mesh manifold and unfolded.
-    bool allowed(std::uint32_t keep, std::uint32_t gone, const Vec3d& x) {
+    bool allowed(std::uint32_t keep, std::uint32_t gone, const Vec3d& x, Scratch& sc) {
         const auto& fk = faces_of(keep);
         const auto& fg = faces_of(gone);
-        shared_.clear();
+        sc.shared.clear();
         for (std::uint32_t f : fg) {
             const Tri& t = tris_[f];
-            if (t[0] == keep || t[1] == keep || t[2] == keep) shared_.push_back(f);
+            if (t[0] == keep || t[1] == keep || t[2] == keep) sc.shared.push_back(f);
         }
-        if (shared_.size() != 2) return false;
+        if (sc.shared.size() != 2) return false;
         // Link condition: the common neighbours of the two ends are exactly the far corners of the
         // two faces on the edge.
-        neighbours(fk, tris_, keep, nk_);
-        neighbours(fg, tris_, gone, ng_);
-        common_.clear();
-        std::set_intersection(nk_.begin(), nk_.end(), ng_.begin(), ng_.end(), std::back_inserter(common_));
+        neighbours(fk, tris_, keep, sc.nk);
+        neighbours(fg, tris_, gone, sc.ng);
+        sc.common.clear();
+        std::set_intersection(sc.nk.begin(), sc.nk.end(), sc.ng.begin(), sc.ng.end(), std::back_inserter(sc.common));
         std::uint32_t far[2];
         for (int s = 0; s < 2; ++s) {
-            const Tri& t = tris_[shared_[std::size_t(s)]];
+            const Tri& t = tris_[sc.shared[std::size_t(s)]];
             far[s] = t[0] != keep && t[0] != gone ? t[0] : (t[1] != keep && t[1] != gone ? t[1] : t[2]);
         }
-        if (far[0] == far[1] || common_.size() != 2) return false;
-        if (!((common_[0] == far[0] && common_[1] == far[1]) || (common_[0] == far[1] && common_[1] == far[0])))
+        if (far[0] == far[1] || sc.common.size() != 2) return false;
+        if (!((sc.common[0] == far[0] && sc.common[1] == far[1]) || (sc.common[0] == far[1] && sc.common[1] == far[0])))
             return false;
         // the merged vertex's neighbours, (N(keep) ∪ N(gone)) less keep and gone: at least 3
-        if (nk_.size() + ng_.size() < 7) return false;
+        if (sc.nk.size() + sc.ng.size() < 7) return false;
         // Faces that stay: no fold, no degenerate or much worse shape.
         for (int side = 0; side < 2; ++side)
             for (std::uint32_t f : side ? fg : fk) {
@@ -281,9 +413,8 @@ private:
         return true;
     }
 
-    void collapse(std::uint32_t keep, std::uint32_t gone, const Vec3d& x) {
-        for (std::uint32_t f : shared_) alive_f_[f] = 0;
-        faces_ -= 2;
+    void collapse(std::uint32_t keep, std::uint32_t gone, const Vec3d& x, const Scratch& sc) {
+        for (std::uint32_t f : sc.shared) alive_f_[f] = 0;
         for (std::uint32_t f : vf_[gone]) {
             if (!alive_f_[f]) continue;
             for (int k = 0; k < 3; ++k)
@@ -294,15 +425,30 @@ private:
         alive_v_[gone] = 0;
         pos_[keep] = x;
         q_[keep] += q_[gone];
-        neighbours(faces_of(keep), tris_, keep, nk_);
     }
 
     /// Drops the dead faces from tris_ and rebuilds the vertices' face lists (same order of faces).
     void compact_faces() {
         std::size_t w = 0;
+        const bool costed = keys_.size() == 3 * tris_.size();
         for (std::size_t f = 0; f < tris_.size(); ++f)
-            if (alive_f_[f]) tris_[w++] = tris_[f];
+            if (alive_f_[f]) {
+                if (costed)  // the slots move with their faces, their keys renumbered
+                    for (std::size_t k = 0; k < 3; ++k) {
+                        const std::uint64_t key = keys_[3 * f + k];
+                        keys_[3 * w + k] =
+                            key == kNoCandidate ? key : (key & ~std::uint64_t(0xffffffffu)) | (3 * w + k);
+                        place_[3 * w + k] = place_[3 * f + k];
+                        state_[3 * w + k] = state_[3 * f + k];
+                    }
+                tris_[w++] = tris_[f];
+            }
         tris_.resize(w);
+        if (costed) {
+            keys_.resize(3 * w);
+            place_.resize(3 * w);
+            state_.resize(3 * w);
+        }
         alive_f_.assign(w, 1);
         for (auto& l : vf_) l.clear();
         for (std::uint32_t f = 0; f < w; ++f)
@@ -327,8 +473,12 @@ private:
     std::size_t faces_ = 0;
     double cos_max_ = 0.5;
     double max_error2_ = 0.0;
-    std::vector<std::uint32_t> shared_, nk_, ng_, common_;
-    std::vector<Candidate> slots_;
+    std::vector<std::uint64_t> keys_;          ///< per slot (3 per face): the candidate key, or kNoCandidate
+    std::vector<Placement> place_;             ///< per slot: the costed placement
+    mutable std::vector<std::uint32_t> hist_;  ///< select's histograms
+    std::vector<std::uint8_t> state_;          ///< per slot: kOpen, kRefused or kOverBound
+    std::vector<std::uint8_t> dirty_;          ///< per vertex: moved or merged since its edges were costed
+    std::vector<std::uint8_t> changed_;        ///< per vertex: its neighbourhood changed since the last costing
 };
 
 }  // namespace
@@ -337,6 +487,9 @@ QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
     check_mesh(m, "decimate_mesh");
     if (m.triangles.empty()) throw InvalidInput("decimate_mesh: empty mesh (no triangles)");
+    if (m.triangles.size() >= (std::size_t(1) << 32) / 3)  // an edge slot is numbered in 32 bits
+        throw InvalidInput("decimate_mesh: too many faces (" + std::to_string(m.triangles.size()) + "), at most " +
+                           std::to_string((std::size_t(1) << 32) / 3 - 1));
     if (!(opt.max_error >= 0) || !std::isfinite(opt.max_error))
         throw InvalidInput("decimate_mesh: max_error must be finite and >= 0, got " + std::to_string(opt.max_error));
     if (opt.target_faces < 4 && !(opt.target_faces == 0 && opt.max_error > 0))

@@ -4,7 +4,7 @@
 /// manifold mesh manifold: every collapse passes the link condition (Dey, Edelsbrunner, Guha &
 /// Nekhayev 1999), turns no face by more than max_normal_change_deg and makes no face degenerate or
 /// worse-shaped below min_quality. Free of GPL code; deterministic; fandisk extracted at resolution 256
-/// (1.1 M faces) to 20,000 faces in a few seconds on 2 cores (benchmarks/README.md, "Decimation").
+/// (1.1 M faces) to 20,000 faces in under 2 seconds on 2 cores (benchmarks/README.md, "Decimation").
 
 #include <cstddef>
 
@@ -68,10 +68,12 @@ struct QemReport {
 /// the connectivity: weld coincident positions first where they should be joined.
 /// \throw InvalidInput if m breaks the Mesh invariant (check_mesh), has no triangles, the options are
 ///        out of range, or tangent_planes is set and m has no normals.
-/// Method: passes; each computes the cost of every edge (TBB parallel), then collapses, cheapest first
-/// among the cheaper half, the edges whose ends and their neighbours no collapse of the pass touched.
-/// Cost: O(F log F) time per pass, a few dozen passes; about 250 bytes per vertex. The result does not
-/// depend on the thread count.
+/// Method: passes. Each costs the edges whose ends moved since the last pass (TBB parallel, into a slot
+/// per face corner), takes the cheapest quarter of the edges in order of cost, picks greedily those whose
+/// ends are not at or next to the ends of an edge picked before (so no two collapses share a face or
+/// read what another writes), and makes those collapses in parallel. An edge the checks refuse waits
+/// until its neighbourhood changes. Cost: O(F log F) time per pass, a few dozen passes; about 350 bytes
+/// per vertex at most. The result does not depend on the thread count.
 QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt);
 
 }  // namespace normalflow
