@@ -1,5 +1,5 @@
-// normalflow tetmesh IN OUT.(mesh|vtu|node) [--quality 1.414] [--min-dihedral 10] [--optimize 2] [--max-volume V]
-//                   [--surface auto|keep|split]
+// normalflow tetmesh IN OUT.(mesh|vtu|node) [--edge-length L] [--quality 1.414] [--min-dihedral 15]
+//                   [--max-dihedral 150] [--optimize 2] [--max-volume V] [--surface auto|keep|split]
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -7,7 +7,9 @@
 
 #include "commands.h"
 #include "core/errors.h"
+#include "io/cgal/cleanup.h"  // plain option and report structs; the code needs CGAL
 #include "io/io.h"
+#include "io/pipeline/pipeline.h"
 #include "io/tetgen/tetmesh.h"  // plain option and report structs; the code needs TetGen
 
 namespace normalflow::cli {
@@ -15,7 +17,8 @@ namespace {
 
 struct TetmeshArgs {
     std::string input, output;
-    TetmeshOptions tetmesh;  ///< the flags parse straight into it
+    TetmeshOptions tetmesh;    ///< the flags parse straight into it
+    double edge_length = 0.0;  ///< > 0: remesh the surface isotropically to this edge length first
     OutputFlags out;
 };
 
@@ -25,10 +28,32 @@ const std::map<std::string, TetmeshOptions::Surface> kSurfaces = {{"auto", Tetme
 
 int run_tetmesh(const TetmeshArgs& a) {
 #ifdef NORMALFLOW_HAS_TETGEN
-    const Mesh m = read_mesh(a.input);
+    Mesh m = read_mesh(a.input);
+    std::size_t remeshed_faces = 0;
+    if (a.edge_length > 0) {
+#ifdef NORMALFLOW_HAS_CGAL
+        // Even triangles first: TetGen keeps the surface's triangles (-Y), and a sliver at the surface
+        // can only be as good as the triangle it stands on (an extraction's or decimation's thin
+        // triangles left 0.02° however TetGen was switched).
+        cgal::CleanupOptions co;
+        co.reduction = cgal::CleanupReduction::Remesh;
+        co.target_edge_length = a.edge_length;
+        const cgal::CleanupReport cr = cgal::cleanup_mesh(m, co);
+        for (const std::string& w : cr.warnings) std::fprintf(stderr, "tetmesh: %s: %s\n", a.input.c_str(), w.c_str());
+        remeshed_faces = m.triangles.size();
+#else
+        throw InvalidInput("tetmesh: --edge-length needs a build with CGAL");
+#endif
+    }
     TetmeshReport r;
     const TetMesh t = tetrahedralize(m, a.tetmesh, &r);
     write_tetmesh(a.output, t);
+    if (!a.out.quiet && a.edge_length == 0 && r.min_dihedral_deg < 10.0)
+        std::fprintf(
+            stderr,
+            "tetmesh: %s: the smallest dihedral angle is %.2f deg; the tetrahedra at the surface are as good as "
+            "its triangles: --edge-length %.3g (its median edge length) remeshes it evenly first\n",
+            a.input.c_str(), r.min_dihedral_deg, model_length_scale(m));
     if (a.out.json) {
         Json j = Json::object();
         j.set("command", "tetmesh")
@@ -39,6 +64,7 @@ int run_tetmesh(const TetmeshArgs& a) {
             .set("min_dihedral_deg", r.min_dihedral_deg)
             .set("volume", r.volume)
             .set("surface_volume", r.surface_volume)
+            .set("remeshed_faces", remeshed_faces)
             .set("seconds", r.seconds)
             .set("switches", r.switches);
         std::printf("%s\n", j.dump().c_str());
@@ -65,12 +91,21 @@ void add_tetmesh_command(CLI::App& app) {
     cmd->add_option("OUT", a->output, "output .mesh (Medit), .vtu (VTK) or .node (+ .ele)")->required();
     TetmeshOptions& o = a->tetmesh;
     cmd->add_option("--quality", o.radius_edge, "radius-edge ratio bound (>= 1)")->capture_default_str();
+    cmd->add_option("--edge-length", a->edge_length,
+                    "remesh the surface to even triangles of this edge length first (world units; CGAL isotropic "
+                    "remeshing): what a surface from extract, smooth or remesh needs for a good minimum angle")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--min-dihedral", o.min_dihedral_deg,
                     "smallest dihedral angle TetGen aims for, degrees (0 = none; tried, not guaranteed)")
         ->check(CLI::Range(0.0, 69.999))
         ->capture_default_str();
-    cmd->add_option("--optimize", o.optimize_level, "TetGen mesh optimisation level 0..10")
-        ->check(CLI::Range(0, 10))
+    cmd->add_option("--max-dihedral", o.max_dihedral_deg,
+                    "largest dihedral angle TetGen's optimiser aims for, degrees (TetGen's own default is 165; the "
+                    "slivers at a kept surface sit at 159-167)")
+        ->check(CLI::Range(90.001, 179.999))
+        ->capture_default_str();
+    cmd->add_option("--optimize", o.optimize_level, "TetGen mesh optimisation level 0..9")
+        ->check(CLI::Range(0, 9))
         ->capture_default_str();
     cmd->add_option("--max-volume", o.max_volume, "largest tetrahedron volume, world units^3 (0 = none)");
     add_enum_option(cmd, "--surface", o.surface, kSurfaces,

@@ -75,9 +75,11 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
     if (!(opt.min_dihedral_deg >= 0.0 && opt.min_dihedral_deg < 70.0))
         throw InvalidInput("tetrahedralize: min_dihedral_deg must be in [0, 70), got " +
                            std::to_string(opt.min_dihedral_deg));
-    if (opt.optimize_level < 0 || opt.optimize_level > 10)
-        throw InvalidInput("tetrahedralize: optimize_level must be in 0..10, got " +
-                           std::to_string(opt.optimize_level));
+    if (!(opt.max_dihedral_deg > 90.0 && opt.max_dihedral_deg < 180.0))
+        throw InvalidInput("tetrahedralize: max_dihedral_deg must be in (90, 180), got " +
+                           std::to_string(opt.max_dihedral_deg));
+    if (opt.optimize_level < 0 || opt.optimize_level > 9)
+        throw InvalidInput("tetrahedralize: optimize_level must be in 0..9, got " + std::to_string(opt.optimize_level));
     validate(m_in);
     const Mesh m = weld_exact(m_in);
 
@@ -102,10 +104,11 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
     }
     char sw[128];
     if (opt.max_volume > 0)
-        std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%da%.9gQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level,
-                      opt.max_volume);
+        std::snprintf(sw, sizeof sw, "pzq%.6g/%.6g/%.6gO%da%.9gQ", opt.radius_edge, opt.min_dihedral_deg,
+                      opt.max_dihedral_deg, opt.optimize_level, opt.max_volume);
     else
-        std::snprintf(sw, sizeof sw, "pzq%.6g/%.6gO%dQ", opt.radius_edge, opt.min_dihedral_deg, opt.optimize_level);
+        std::snprintf(sw, sizeof sw, "pzq%.6g/%.6g/%.6gO%dQ", opt.radius_edge, opt.min_dihedral_deg,
+                      opt.max_dihedral_deg, opt.optimize_level);
     // TetGen runs in a forked child (io/util/isolate.h): a crash on its error paths becomes an
     // IoError instead of ending the process. TetGen is single-threaded, as the child requires.
     const auto run = [&](const std::string& switches) {

@@ -18,10 +18,19 @@ struct TetmeshOptions {
     double max_volume = 0.0;     ///< largest tetrahedron volume, world units cubed (TetGen -a); 0 = no bound
     /// Smallest dihedral angle TetGen's refinement aims for, degrees (TetGen -q<radius_edge>/<deg>), in
     /// [0, 70); 0 = no dihedral bound (radius-edge only, which leaves slivers). TetGen tries but does not
-    /// guarantee it (tetrahedra at the input surface keep the angles the surface dictates).
-    double min_dihedral_deg = 10.0;
+    /// guarantee it: with the surface kept (-Y) it may not split a tetrahedron whose circumcentre
+    /// encroaches on the surface, so the slivers at the surface are left to the optimiser
+    /// (max_dihedral_deg). 15 with max_dihedral_deg 150 gave at least 12.5° on every evenly remeshed
+    /// fandisk surface tried (18 of them) where 10 with TetGen's own 165 gave 7.3–9.5° on all of them
+    /// (benchmarks/README.md, "Tetrahedra fit for simulation"); 20 did not finish in two minutes.
+    double min_dihedral_deg = 15.0;
+    /// Largest dihedral angle TetGen's optimiser aims for, degrees (the third -q field, TetGen's
+    /// optmaxdihedral; its own default is 165), in (90, 180). The optimiser only works on tetrahedra
+    /// with a dihedral angle above it: the slivers at a kept surface have their largest angle at
+    /// 159–167°, so TetGen's 165 leaves most of them alone, and 150 brings them into its flips.
+    double max_dihedral_deg = 150.0;
     /// TetGen's mesh optimisation level (-O<level>; flips and vertex smoothing that raise the smallest
-    /// dihedral angle), 0 (none) .. 10; TetGen's default is 2.
+    /// dihedral angle), 0 (none) .. 9 (TetGen reads one digit); TetGen's default is 2.
     int optimize_level = 2;
     /// Whether the input triangles stay the boundary faces (TetGen -Y): the tetrahedra then meet the
     /// surface in exactly its triangles and Steiner points go only inside. Keep: the surface users
@@ -54,7 +63,7 @@ struct TetmeshReport {
 };
 
 /// Tetrahedralizes the volume enclosed by the closed surface m (TetGen switches
-/// "pzq<radius_edge>/<min_dihedral_deg>O<optimize_level>Q", plus "a<max_volume>" when set). When that
+/// "pzq<radius_edge>/<min_dihedral_deg>/<max_dihedral_deg>O<optimize_level>Q", plus "a<max_volume>" when set). When that
 /// run fails (TetGen 1.5.0 aborts on nearly coplanar adjacent faces, which extracted surfaces have by
 /// the thousand), it runs again with "Y" added ("pzYq..."): the input triangles are kept as the
 /// boundary faces, and max_volume then bounds only tetrahedra that can be split without touching them.

@@ -73,6 +73,27 @@ assert "Y" in k["switches"] and "Y" not in s["switches"], (k, s)
 assert abs(k["volume"] - k["surface_volume"]) < 1e-9 * k["surface_volume"], k
 assert s["tetrahedra"] > 10 * k["tetrahedra"], (k, s)
 PY
+  # --edge-length remeshes the surface evenly first (CGAL), the defaults switch -q.../15/150
+  if "$nf" tetmesh --json --edge-length 0.5 "$fixtures/cube_ascii.ply" "$tmp/cube3.vtu" >"$tmp/out3.txt" \
+    2>"$tmp/err.txt"; then
+    python3 - "$tmp/out3.txt" <<'PY' || fail "tetmesh --edge-length --json output wrong"
+import json, sys
+r = json.loads(open(sys.argv[1]).read().splitlines()[-1])
+assert r["remeshed_faces"] > 12 and "/15/150O2" in r["switches"], r
+assert r["min_dihedral_deg"] >= 10, r
+PY
+  elif ! grep -q "needs a build with CGAL" "$tmp/err.txt"; then
+    fail "tetmesh --edge-length failed: $(cat "$tmp/err.txt")"
+  fi
+  # option errors (CLI11 adds its "Run with --help" line): refused, naming the flag
+  for bad in "--optimize 10" "--edge-length -1" "--max-dihedral 180"; do
+    # shellcheck disable=SC2086
+    if "$nf" tetmesh $bad "$fixtures/cube_ascii.ply" "$tmp/cube4.vtu" >"$tmp/out.txt" 2>"$tmp/err.txt"; then
+      fail "tetmesh $bad: exit status 0"
+    fi
+    grep -qF -- "${bad%% *}" "$tmp/err.txt" || fail "tetmesh $bad: stderr does not name the flag: $(cat "$tmp/err.txt")"
+  done
+  [ ! -e "$tmp/cube4.vtu" ] || fail "tetmesh left an output after refusing its options"
 elif ! grep -q "needs a build with TetGen" "$tmp/err.txt"; then
   fail "tetmesh failed: $(cat "$tmp/err.txt")"
 fi
