@@ -42,11 +42,16 @@ int run_cleanup(const CleanupArgs& a) {
     cgal::CleanupReport r;
     if (checked) {
         Mesh input = m;
-        if (const MeshReport mr = mesh_report(m); mr.vertices < mr.input_vertices) {
+        // welding joins positions only: the report of the welded mesh is this one
+        const MeshReport mr = mesh_report(m);
+        if (mr.vertices < mr.input_vertices) {
             input = weld_exact(m);  // shared corners written as separate vertices (STL, soups): join them
             m = input;
         }
-        const DecimationReport d = decimate_mesh(m, o.target_faces, a.decimator);
+        // the distance is measured below, after the repairs
+        const DecimationReport d = decimate_mesh(
+            m,
+            {.target_faces = o.target_faces, .decimator = a.decimator, .input_report = &mr, .measure_distance = false});
         decimator = d.decimator;
         o.reduction = cgal::CleanupReduction::None;
         // no needle collapse after it: the decimation made no degenerate face, and its long thin

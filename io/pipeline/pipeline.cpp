@@ -378,7 +378,7 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
     DecimationReport rep;
     rep.faces_before = m.triangles.size();
     rep.vertices_before = m.positions.size();
-    const MeshReport input = mesh_report(m);
+    const MeshReport input = options.input_report ? *options.input_report : mesh_report(m);
     Mesh result;
     bool done = false;
     if (decimator == Decimator::Auto || decimator == Decimator::Quadric) {
@@ -470,10 +470,12 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
         const std::string why = broken_guarantee(input, out, rep.self_intersections);
         if (!why.empty()) rep.warnings.push_back("decimated result is " + why);
     }
-    const SampledDistance d = decimation_distance(result, m);
-    rep.result_to_input = d.a_to_b;
-    rep.input_to_result = d.b_to_a;
-    rep.hausdorff = d.hausdorff;
+    if (options.measure_distance) {
+        const SampledDistance d = decimation_distance(result, m);
+        rep.result_to_input = d.a_to_b;
+        rep.input_to_result = d.b_to_a;
+        rep.hausdorff = d.hausdorff;
+    }
     rep.faces_after = result.triangles.size();
     rep.vertices_after = result.positions.size();
     m = std::move(result);

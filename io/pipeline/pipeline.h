@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/mesh.h"
+#include "core/mesh_report.h"
 #include "core/progress.h"
 #include "core/volume.h"
 #include "extract/extract_surface.h"
@@ -293,6 +294,11 @@ struct DecimationOptions {
     /// The quadric decimator builds its quadrics from the tangent planes of m.normals (QemOptions::
     /// tangent_planes): for an extracted surface with the field's normals (set_volume_normals).
     bool tangent_planes = false;
+    /// m's mesh_report, when the caller has it: the guarantees are checked against it instead of
+    /// computing it again (0.7 s for a million faces).
+    const MeshReport* input_report = nullptr;
+    /// false: DecimationReport's distances are left at 0, for a caller that measures its own final result.
+    bool measure_distance = true;
 };
 
 /// Decimates m in place with options.decimator to at most options.target_faces faces and/or within
