@@ -60,6 +60,61 @@ double quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, Vec3d* normal) {
     return l2 > 0 ? 2.0 * std::numbers::sqrt3 * norm(n) / l2 : 0.0;  // 4√3 · area / Σ l², area = |n|/2
 }
 
+/// A vertex's face list: up to kInline faces in place (an extraction's vertices have about six), more on
+/// the heap. The decimation's lists then sit in one array instead of a heap block each: the set-up makes
+/// no allocation per vertex, and the passes' walks over neighbourhoods stay in that array.
+class FaceList {
+public:
+    static constexpr std::uint32_t kInline = 10;
+    FaceList() = default;
+    FaceList(const FaceList&) = delete;
+    FaceList& operator=(const FaceList&) = delete;
+    ~FaceList() { release(); }
+    const std::uint32_t* begin() const { return cap_ > kInline ? heap_ : inline_; }
+    const std::uint32_t* end() const { return begin() + size_; }
+    std::uint32_t size() const { return size_; }
+    void push_back(std::uint32_t f) {
+        if (size_ == std::max(cap_, kInline)) grow(2 * size_);
+        data()[size_++] = f;
+    }
+    void assign(const std::uint32_t* first, const std::uint32_t* last) {
+        size_ = 0;
+        if (std::uint32_t(last - first) > std::max(cap_, kInline)) grow(std::uint32_t(last - first));
+        std::copy(first, last, data());
+        size_ = std::uint32_t(last - first);
+    }
+    void clear() { size_ = 0; }
+    /// Frees the heap block, if any, and empties the list.
+    void reset() {
+        release();
+        size_ = 0;
+    }
+    template <class Pred>
+    void remove_if(Pred dead) {
+        std::uint32_t* d = data();
+        size_ = std::uint32_t(std::remove_if(d, d + size_, dead) - d);
+    }
+
+private:
+    std::uint32_t* data() { return cap_ > kInline ? heap_ : inline_; }
+    void grow(std::uint32_t want) {
+        auto* fresh = new std::uint32_t[want];
+        std::copy(begin(), end(), fresh);
+        release();
+        heap_ = fresh;
+        cap_ = want;
+    }
+    void release() {
+        if (cap_ > kInline) delete[] heap_;
+        cap_ = 0;
+    }
+    union {
+        std::uint32_t inline_[kInline];
+        std::uint32_t* heap_;
+    };
+    std::uint32_t size_ = 0, cap_ = 0;  ///< cap_ > kInline: the faces are on the heap
+};
+
 class QemDecimation {
 public:
     QemDecimation(Mesh& m, const QemOptions& o) : m_(m), opt_(o) {
@@ -79,21 +134,8 @@ public:
             for (std::uint32_t f = 0; f < nf; ++f)
                 for (const std::uint32_t v : tris_[f]) list[next[v]++] = f;
         }
-        // Each face's plane: unit normal and area (zero for a degenerate face).
-        std::vector<Vec3d> unit(nf);
-        std::vector<double> farea(nf);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 4096), [&](const auto& r) {
-            for (std::size_t f = r.begin(); f != r.end(); ++f) {
-                const Tri& t = tris_[f];
-                const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
-                const Vec3d n = cross(b - a, c - a);
-                const double len = norm(n);
-                unit[f] = len > 0 ? n / len : Vec3d{};
-                farea[f] = 0.5 * len;
-            }
-        });
         q_.assign(nv, {});
-        vf_.assign(nv, {});
+        vf_ = std::vector<FaceList>(nv);
         const bool tangent = o.tangent_planes;  // decimate_mesh_qem checked that m has a normal per vertex
         // Per vertex, in parallel (each writes its own entries only): its quadric, summed over its faces
         // in face order; its face list; and whether it is locked: on a border or non-manifold edge (an
@@ -108,11 +150,16 @@ public:
                 for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
                     const std::uint32_t f = list[i];
                     const Tri& t = tris_[f];
-                    if (farea[f] > 0) {
-                        if (own)
-                            area += farea[f] / 3.0;
-                        else
-                            q_[v].add_plane(unit[f], -dot(unit[f], Vec3d(m.positions[t[0]])), farea[f]);
+                    // the face's plane (computed for each of its corners: cheaper than storing it)
+                    const Vec3d p0(m.positions[t[0]]), p1(m.positions[t[1]]), p2(m.positions[t[2]]);
+                    const Vec3d n = cross(p1 - p0, p2 - p0);
+                    if (const double len = norm(n); len > 0) {
+                        if (own) {
+                            area += len / 6.0;
+                        } else {
+                            const Vec3d u = n / len;
+                            q_[v].add_plane(u, -dot(u, p0), 0.5 * len);
+                        }
                     }
                     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
                         locked_[v] = 1;
@@ -133,7 +180,7 @@ public:
                     const Vec3d u = normalized(Vec3d(m.normals[v]));
                     q_[v].add_plane(u, -dot(u, pos_[v]), area);
                 }
-                vf_[v].assign(list.begin() + start[v], list.begin() + start[v + 1]);
+                vf_[v].assign(list.data() + start[v], list.data() + start[v + 1]);
             }
         });
         faces_ = nf;
@@ -348,13 +395,13 @@ private:
     }
 
     /// The alive faces of v (purging dead ones from its list).
-    std::vector<std::uint32_t>& faces_of(std::uint32_t v) {
-        auto& l = vf_[v];
-        l.erase(std::remove_if(l.begin(), l.end(), [&](std::uint32_t f) { return !alive_f_[f]; }), l.end());
+    const FaceList& faces_of(std::uint32_t v) {
+        FaceList& l = vf_[v];
+        l.remove_if([&](std::uint32_t f) { return !alive_f_[f]; });
         return l;
     }
 
-    static void neighbours(const std::vector<std::uint32_t>& faces, const std::vector<Tri>& tris, std::uint32_t v,
+    static void neighbours(const FaceList& faces, const std::vector<Tri>& tris, std::uint32_t v,
                            std::vector<std::uint32_t>& out) {
         out.clear();
         for (std::uint32_t f : faces)
@@ -421,7 +468,7 @@ private:
                 if (tris_[f][k] == gone) tris_[f][k] = keep;
             vf_[keep].push_back(f);
         }
-        vf_[gone] = {};
+        vf_[gone].reset();
         alive_v_[gone] = 0;
         pos_[keep] = x;
         q_[keep] += q_[gone];
@@ -467,7 +514,7 @@ private:
     QemOptions opt_;
     std::vector<Vec3d> pos_;
     std::vector<Quadric> q_;
-    std::vector<std::vector<std::uint32_t>> vf_;
+    std::vector<FaceList> vf_;
     std::vector<std::uint8_t> alive_v_, locked_, alive_f_;
     std::vector<Tri> tris_;
     std::size_t faces_ = 0;
