@@ -48,12 +48,19 @@ int run_tetmesh(const TetmeshArgs& a) {
     TetmeshReport r;
     const TetMesh t = tetrahedralize(m, a.tetmesh, &r);
     write_tetmesh(a.output, t);
-    if (!a.out.quiet && a.edge_length == 0 && r.min_dihedral_deg < 10.0)
-        std::fprintf(
-            stderr,
-            "tetmesh: %s: the smallest dihedral angle is %.2f deg; the tetrahedra at the surface are as good as "
-            "its triangles: --edge-length %.3g (its median edge length) remeshes it evenly first\n",
-            a.input.c_str(), r.min_dihedral_deg, model_length_scale(m));
+    if (!a.out.quiet && r.min_dihedral_deg < 10.0) {
+        if (r.surface_min_angle_deg < 10.0)
+            std::fprintf(stderr,
+                         "tetmesh: %s: the smallest dihedral angle is %.2f deg: the surface itself folds to %.2f deg "
+                         "between two faces, and no tetrahedron there can do better\n",
+                         a.input.c_str(), r.min_dihedral_deg, r.surface_min_angle_deg);
+        else if (a.edge_length == 0)
+            std::fprintf(
+                stderr,
+                "tetmesh: %s: the smallest dihedral angle is %.2f deg; the tetrahedra at the surface are as "
+                "good as its triangles: --edge-length %.3g (its median edge length) remeshes it evenly first\n",
+                a.input.c_str(), r.min_dihedral_deg, model_length_scale(m));
+    }
     if (a.out.json) {
         Json j = Json::object();
         j.set("command", "tetmesh")
@@ -64,6 +71,7 @@ int run_tetmesh(const TetmeshArgs& a) {
             .set("min_dihedral_deg", r.min_dihedral_deg)
             .set("volume", r.volume)
             .set("surface_volume", r.surface_volume)
+            .set("surface_min_angle_deg", r.surface_min_angle_deg)
             .set("remeshed_faces", remeshed_faces)
             .set("seconds", r.seconds)
             .set("switches", r.switches);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,41 @@ double min_dihedral(const Vec3d p[4]) {
         const Vec3d n2 = cross3(ab, sub(p[e[3]], p[e[0]]));
         const double c = dot3(n1, n2) / (norm3(n1) * norm3(n2));
         best = std::min(best, std::acos(std::clamp(c, -1.0, 1.0)));
+    }
+    return best;
+}
+
+/// The smallest angle between adjacent faces through the volume, radians, of a closed, consistently
+/// oriented (outward) manifold surface: π − φ at a convex edge, π + φ at a concave one, φ the angle
+/// between the two faces' normals.
+double surface_min_angle(const Mesh& m) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> half;  // (edge key, face)
+    half.reserve(3 * m.triangles.size());
+    for (std::uint32_t f = 0; f < m.triangles.size(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = m.triangles[f][k], b = m.triangles[f][(k + 1) % 3];
+            half.push_back({std::uint64_t(std::min(a, b)) << 32 | std::max(a, b), f});
+        }
+    std::sort(half.begin(), half.end());
+    const auto normal = [&](std::uint32_t f) {
+        const Tri& t = m.triangles[f];
+        const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
+        const Vec3d n = cross3(sub(b, a), sub(c, a));
+        const double l = norm3(n);
+        return l > 0 ? Vec3d{n[0] / l, n[1] / l, n[2] / l} : n;
+    };
+    double best = 2 * std::numbers::pi;
+    for (std::size_t i = 0; i + 1 < half.size(); ++i) {
+        if (half[i].first != half[i + 1].first) continue;
+        const std::uint32_t f1 = half[i].second, f2 = half[i + 1].second;
+        const Vec3d n1 = normal(f1), n2 = normal(f2);
+        const auto a = std::uint32_t(half[i].first >> 32);
+        std::uint32_t c2 = m.triangles[f2][0];  // f2's corner off the edge
+        for (const std::uint32_t v : m.triangles[f2])
+            if (v != a && v != std::uint32_t(half[i].first)) c2 = v;
+        const double phi = std::acos(std::clamp(dot3(n1, n2), -1.0, 1.0));
+        const bool convex = dot3(n1, sub(Vec3d(m.positions[c2]), Vec3d(m.positions[a]))) <= 0;
+        best = std::min(best, convex ? std::numbers::pi - phi : std::numbers::pi + phi);
     }
     return best;
 }
@@ -179,6 +215,7 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
         r.volume = vol;
         r.min_dihedral_deg = mind * 180.0 / 3.14159265358979323846;
         r.surface_volume = mesh_report(m).volume;
+        r.surface_min_angle_deg = surface_min_angle(m) * 180.0 / std::numbers::pi;
         r.switches = used;
         r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         *report = r;

@@ -58,7 +58,10 @@ struct TetmeshReport {
     double min_dihedral_deg = 0.0;  ///< smallest dihedral angle over all tetrahedra, degrees
     double volume = 0.0;            ///< sum of tetrahedron volumes, world units cubed
     double surface_volume = 0.0;    ///< volume enclosed by the input surface (divergence theorem)
-    std::string switches;           ///< the TetGen switches of the run that succeeded ("pzYq..." after a retry)
+    /// The smallest angle, degrees, between two adjacent surface faces measured through the volume (90 on a
+    /// cube's edges): a tetrahedron at that edge can have no larger dihedral angle, whatever TetGen does.
+    double surface_min_angle_deg = 0.0;
+    std::string switches;  ///< the TetGen switches of the run that succeeded ("pzYq..." after a retry)
     double seconds = 0.0;
 };
 

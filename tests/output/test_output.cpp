@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <numbers>
 #include <string>
 #include <tuple>
 
@@ -183,6 +184,19 @@ TEST(Tetmesh, SphereAndCubeVolume) {
     tetrahedralize(test::box_mesh({0, 0, 0}, {1, 1, 1}), o, &rc);
     EXPECT_NEAR(rc.volume, 1.0, 1e-6);
     EXPECT_GE(rc.tetrahedra, 100u);
+    // the surface's own smallest angle between adjacent faces, through the volume: a cube's edges 90°,
+    // a regular tetrahedron's acos(1/3) = 70.53°, a fine sphere's nearly flat 180°
+    EXPECT_NEAR(rc.surface_min_angle_deg, 90.0, 1e-9);
+    EXPECT_GT(r.surface_min_angle_deg, 165.0);
+    EXPECT_LT(r.surface_min_angle_deg, 180.0);
+    Mesh tet;
+    tet.positions = {{1, 1, 1}, {1, -1, -1}, {-1, 1, -1}, {-1, -1, 1}};
+    tet.triangles = {{0, 1, 2}, {0, 3, 1}, {0, 2, 3}, {1, 3, 2}};
+    if (mesh_report(tet).volume < 0)
+        for (Tri& f : tet.triangles) std::swap(f[1], f[2]);
+    TetmeshReport rt;
+    tetrahedralize(tet, {}, &rt);
+    EXPECT_NEAR(rt.surface_min_angle_deg, std::acos(1.0 / 3.0) * 180.0 / std::numbers::pi, 1e-6);
 }
 
 TEST(Tetmesh, RefusesOpenAndSelfIntersectingSurfaces) {
