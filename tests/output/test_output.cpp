@@ -11,6 +11,7 @@
 #include <iterator>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <tuple>
 
@@ -250,14 +251,24 @@ TEST(Output, NormalflowSurfaceFromRealModel) {
 // Issue 5: TetGen 1.5.0 with "pzq..." aborts in fillcavity (Assertion `searchtet.tet != midface->tet')
 // on surfaces extract_surface produces: it merges nearly (not exactly) coplanar adjacent faces into
 // non-planar facets. tetrahedralize retries with Y (surface kept as given), which meshes them.
-TEST(Tetmesh, MeshesAnExtractedAndDecimatedSurface) {
+namespace {
+
+/// The true fandisk scan-converted at 128 and extracted (287k faces), or nothing without shared/data.
+std::optional<Mesh> extracted_fandisk_128() {
     const fs::path f = fs::path(NORMALFLOW_TEST_DATA) / "pairs_gnf" / "fandisk_gt.ply";
-    if (!fs::exists(f)) GTEST_SKIP() << "shared/data missing";
+    if (!fs::exists(f)) return std::nullopt;
     const Mesh gt = read_mesh(f.string());
     ScanConvertOptions so;
     so.resolution = 128;
-    const Volume v = scan_convert(gt, *make_bvh_query(gt), so);
-    Mesh m = extract_surface(v);
+    return extract_surface(scan_convert(gt, *make_bvh_query(gt), so));
+}
+
+}  // namespace
+
+TEST(Tetmesh, MeshesAnExtractedAndDecimatedSurface) {
+    std::optional<Mesh> extracted = extracted_fandisk_128();
+    if (!extracted) GTEST_SKIP() << "shared/data missing";
+    Mesh& m = *extracted;
     cgal::CleanupOptions o;
     o.reduction = cgal::CleanupReduction::FaceCount;
     o.target_faces = 10000;
@@ -275,12 +286,9 @@ TEST(Tetmesh, MeshesAnExtractedAndDecimatedSurface) {
 // angle is 10 degrees or more. TetGen's own optimiser threshold (165) leaves the slivers at the kept
 // surface alone (measured 8.8 degrees here; 7.3-9.5 on 18 fandisk surfaces), which this would catch.
 TEST(Tetmesh, AnEvenlyRemeshedExtractionGetsTenDegreesOrMore) {
-    const fs::path f = fs::path(NORMALFLOW_TEST_DATA) / "pairs_gnf" / "fandisk_gt.ply";
-    if (!fs::exists(f)) GTEST_SKIP() << "shared/data missing";
-    const Mesh gt = read_mesh(f.string());
-    ScanConvertOptions so;
-    so.resolution = 128;
-    Mesh m = extract_surface(scan_convert(gt, *make_bvh_query(gt), so));
+    std::optional<Mesh> extracted = extracted_fandisk_128();
+    if (!extracted) GTEST_SKIP() << "shared/data missing";
+    Mesh& m = *extracted;
     cgal::CleanupOptions o;
     o.reduction = cgal::CleanupReduction::Remesh;
     o.target_edge_length = 0.12;  // about 3 voxels
