@@ -213,7 +213,7 @@ TetMesh tetrahedralize(const Mesh& m_in, const TetmeshOptions& opt, TetmeshRepor
             mind = std::min(mind, min_dihedral(p));
         }
         r.volume = vol;
-        r.min_dihedral_deg = mind * 180.0 / 3.14159265358979323846;
+        r.min_dihedral_deg = mind * 180.0 / std::numbers::pi;
         r.surface_volume = mesh_report(m).volume;
         r.surface_min_angle_deg = surface_min_angle(m) * 180.0 / std::numbers::pi;
         r.switches = used;

@@ -121,7 +121,6 @@ public:
         const std::size_t nv = m.positions.size(), nf = m.triangles.size();
         tris_ = m.triangles;
         pos_.resize(nv);
-        alive_v_.assign(nv, 1);
         locked_.assign(nv, 0);
         alive_f_.assign(nf, 1);
         // The faces of each vertex, in face order (a counting sort).
@@ -469,7 +468,6 @@ private:
             vf_[keep].push_back(f);
         }
         vf_[gone].reset();
-        alive_v_[gone] = 0;
         pos_[keep] = x;
         q_[keep] += q_[gone];
     }
@@ -515,7 +513,7 @@ private:
     std::vector<Vec3d> pos_;
     std::vector<Quadric> q_;
     std::vector<FaceList> vf_;
-    std::vector<std::uint8_t> alive_v_, locked_, alive_f_;
+    std::vector<std::uint8_t> locked_, alive_f_;
     std::vector<Tri> tris_;
     std::size_t faces_ = 0;
     double cos_max_ = 0.5;
