@@ -72,6 +72,22 @@ void refuse_overwriting_input(const std::string& input, const std::string& outpu
         throw InvalidInput(output + " is the input file; write the result to another file");
 }
 
+void refuse_unwritable_output(const std::string& output) {
+    if (output.empty()) return;
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::path out(output);
+    if (fs::is_directory(out, ec)) throw IoError(output + " cannot be written: it is a folder; name a file in it");
+    const fs::path folder = out.has_parent_path() ? out.parent_path() : fs::path(".");
+    const auto status = fs::status(folder, ec);
+    if (!fs::exists(status))
+        throw IoError(output + " cannot be written: the folder " + folder.string() + " does not exist");
+    if (!fs::is_directory(status))
+        throw IoError(output + " cannot be written: " + folder.string() + " is not a folder");
+    if (::access(folder.c_str(), W_OK | X_OK) != 0)
+        throw IoError(output + " cannot be written: the folder " + folder.string() + " is not writable");
+}
+
 ErrorStatus error_status(std::exception_ptr error) {
     try {
         std::rethrow_exception(error);

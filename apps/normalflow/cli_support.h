@@ -73,6 +73,12 @@ int guarded(const char* command, int (*fn)(void*), void* ctx);
 /// \throw InvalidInput "OUT is the input file; write the result to another file" (guarded() names the command).
 void refuse_overwriting_input(const std::string& input, const std::string& output);
 
+/// No work is thrown away: an output whose folder does not exist, is not a folder or cannot be written to, or
+/// that is itself a folder, is refused before any work (the result is written to a temporary file in that folder
+/// and renamed into place).
+/// \throw IoError "OUT cannot be written: ..." naming the folder and why.
+void refuse_unwritable_output(const std::string& output);
+
 /// Adds --json and --quiet to a subcommand.
 void add_output_flags(CLI::App* cmd, OutputFlags& out);
 
@@ -130,8 +136,10 @@ void on_run(CLI::App* cmd, std::shared_ptr<Args> args, int (*fn)(const Args&)) {
                 if constexpr (requires {
                                   c->args->input;
                                   c->args->output;
-                              })
+                              }) {
                     refuse_overwriting_input(c->args->input, c->args->output);
+                    refuse_unwritable_output(c->args->output);
+                }
                 return c->fn(*c->args);
             },
             &ctx);

@@ -30,6 +30,16 @@ expect_error "$tmp/cube.xyz" "$nf" info "$tmp/cube.xyz"
 expect_error "/nonexistent/dir/out.ply" "$nf" smooth "$root/examples/noisy_part.ply" /nonexistent/dir/out.ply \
   --resolution 32 --iterations 1
 [ ! -e /nonexistent/dir ] || fail "/nonexistent/dir was created"
+# an output that cannot be written is refused before any work (issue 38): at a resolution whose memory check
+# would refuse the run (exit 6) or whose run would take minutes, the output's folder is what is named (exit 4)
+expect_error "$tmp/nodir/out.ply" "$nf" smooth "$root/examples/noisy_part.ply" "$tmp/nodir/out.ply" --resolution 4096
+[ "$rc" -eq 4 ] || fail "smooth into a missing folder: exit $rc, want 4 (refused before the memory check)"
+grep -qF "does not exist" "$tmp/err.txt" || fail "missing folder: $(cat "$tmp/err.txt")"
+expect_error "$tmp" "$nf" remesh "$root/examples/noisy_part.ply" "$tmp" --resolution 4096
+[ "$rc" -eq 4 ] || fail "remesh into a folder: exit $rc, want 4"
+cp "$fixtures/cube_ascii.ply" "$tmp/afile"
+expect_error "$tmp/afile/out.ply" "$nf" convert "$fixtures/cube_ascii.ply" "$tmp/afile/out.ply"
+rm -f "$tmp/afile"
 # compare --correspondence: a candidate with other connectivity is refused in one line naming it
 expect_error "$root/examples/noisy_part.ply" "$nf" compare "$fixtures/cube_ascii.ply" "$root/examples/noisy_part.ply" \
   --correspondence --no-self-intersections
