@@ -40,8 +40,6 @@ using test::RadialStats;
 using test::sphere_sdf;
 using test::total_curvature;
 
-constexpr double kPi = 3.14159265358979323846;
-
 /// Default options with the paper's 25 normal steps per main iteration (fast tests).
 SmoothOptions options(SmoothMode mode, int iterations) {
     SmoothOptions o;
