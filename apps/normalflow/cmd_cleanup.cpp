@@ -34,6 +34,7 @@ int run_cleanup(const CleanupArgs& a) {
     if (o.max_error > 0) o.reduction = cgal::CleanupReduction::ErrorBound;
     if (o.target_edge_length > 0) o.reduction = cgal::CleanupReduction::Remesh;
     Mesh m = read_mesh(a.input);
+    const bool had_normals = m.has_normals(), had_colors = m.has_colors(), had_texcoords = m.has_texcoords();
     // --target-faces: decimate_mesh first (the quadric collapse by default, checked, CGAL's edge collapse
     // as the fallback), on the welded input, then the repairs on the small result; --decimator cgal keeps
     // CGAL's own FaceCount reduction after the repairs.
@@ -70,10 +71,22 @@ int run_cleanup(const CleanupArgs& a) {
     } else {
         r = cgal::cleanup_mesh(m, o);
     }
+    // The repairs merge and renumber vertices, which drops the attributes: normals are recomputed from the result,
+    // so that a mesh that shaded smoothly still does (the web route: cleanup, then compress); what cannot be
+    // recomputed is said.
+    const bool normals_recomputed = had_normals && !m.has_normals();
+    if (normals_recomputed) compute_vertex_normals(m);
+    if ((had_colors && !m.has_colors()) || (had_texcoords && !m.has_texcoords()))
+        r.warnings.push_back(std::string("the input's ") +
+                             (had_colors && had_texcoords ? "colours and texture coordinates were"
+                              : had_colors                ? "colours were"
+                                                          : "texture coordinates were") +
+                             " dropped: the repairs renumber the vertices");
     write_mesh(a.output, m);
     if (a.out.json) {
         Json j = to_json(r);
         if (!decimator.empty()) j.set("decimator", decimator);
+        if (normals_recomputed) j.set("normals", "recomputed");
         j.set("command", "cleanup").set("input", a.input).set("output", a.output);
         std::printf("%s\n", j.dump().c_str());
     } else if (!a.out.quiet) {

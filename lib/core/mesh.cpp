@@ -57,4 +57,24 @@ void remove_unreferenced_vertices(Mesh& m) {
         for (std::uint32_t& v : t) v = remap[v];
 }
 
+void compute_vertex_normals(Mesh& m) {
+    std::vector<Vec3d> sum(m.positions.size(), Vec3d{});
+    for (const Tri& t : m.triangles) {
+        const Vec3d n = face_area_vector(m, t);
+        const double len = norm(n);
+        if (!(len > 0)) continue;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3d p(m.positions[t[k]]);
+            const Vec3d e1 = Vec3d(m.positions[t[(k + 1) % 3]]) - p, e2 = Vec3d(m.positions[t[(k + 2) % 3]]) - p;
+            const double angle = std::atan2(norm(cross(e1, e2)), dot(e1, e2));
+            sum[t[k]] = sum[t[k]] + n * (angle / len);
+        }
+    }
+    m.normals.assign(m.positions.size(), Vec3f{});
+    for (std::size_t v = 0; v < sum.size(); ++v) {
+        const double len = norm(sum[v]);
+        if (len > 0 && std::isfinite(len)) m.normals[v] = Vec3f(sum[v] / len);
+    }
+}
+
 }  // namespace normalflow

@@ -78,6 +78,12 @@ void check_mesh(const Mesh& m, std::string_view who);
 /// and the triangles are renumbered. Cost: two passes over the triangles and one over the vertices.
 void remove_unreferenced_vertices(Mesh& m);
 
+/// Sets m.normals to unit vertex normals from its triangles, each face's normal weighted by its angle at the vertex
+/// (Thürmer and Wüthrich 1998: independent of how the faces around a vertex are split). A vertex in no triangle of
+/// positive area gets a zero normal, as Mesh::normals allows. For meshes whose stage dropped the normals, so that
+/// the written file still shades smoothly. Cost: one pass over the triangles, one over the vertices.
+void compute_vertex_normals(Mesh& m);
+
 /// Bounding box of all positions of m.
 inline Box3d bounding_box(const Mesh& m) {
     Box3d b;

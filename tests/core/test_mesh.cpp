@@ -27,6 +27,26 @@ std::string message(const Mesh& m) {
     return "";
 }
 
+// Angle weighting: a cube corner's normal is the diagonal however its three faces are split, and a vertex in no
+// face of positive area gets a zero normal.
+TEST(VertexNormals, CubeCornersAreTheDiagonalWhateverTheSplit) {
+    Mesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {5, 5, 5}};
+    m.triangles = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                   {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+    compute_vertex_normals(m);
+    ASSERT_EQ(m.normals.size(), m.positions.size());
+    for (std::size_t v = 0; v < 8; ++v) {
+        const Vec3d outward = normalized(Vec3d(m.positions[v]) - Vec3d{0.5, 0.5, 0.5});
+        EXPECT_NEAR(dot(Vec3d(m.normals[v]), outward), 1.0, 1e-6) << "corner " << v;
+    }
+    EXPECT_EQ(m.normals[8], (Vec3f{0, 0, 0}));  // in no triangle
+    m.triangles.push_back({8, 8, 0});           // a degenerate face adds nothing
+    compute_vertex_normals(m);
+    EXPECT_EQ(m.normals[8], (Vec3f{0, 0, 0}));
+    check_mesh(m, "test");
+}
+
 TEST(CheckMesh, ValidAndEmptyMeshesPass) {
     EXPECT_EQ(message(triangle()), "");
     EXPECT_EQ(message(Mesh{}), "");  // nothing to check; stages that need triangles say so themselves

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <numbers>
 #include <string>
 
 #include "core/errors.h"
@@ -515,6 +516,38 @@ TEST(Pipeline, CliTexturedInputKeepsItsAttributesThroughSmoothAndCompress) {
         EXPECT_LT(e.texcoord, 1e-3);
     }
 }
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+// The README's web route: CGAL's repairs renumber the vertices and drop the attributes; cleanup recomputes the
+// normals (radial on a sphere), says it dropped the colours, and compress then writes a GLB with NORMAL.
+TEST(Pipeline, CliCleanupThenCompressKeepsTheShading) {
+    test::TempDir dir;
+    Mesh in = test::attributed_sphere(4);
+    for (Rgba8& c : in.colors) c[3] = 255;  // PLY colours are written with alpha, but keep the two readers equal
+    const std::string ply = dir / "in.ply", out = dir / "clean.ply", glb = dir / "web.glb";
+    write_mesh(ply, in);
+    const std::string cli = NORMALFLOW_TEST_CLI;
+    const std::string cleanup =
+        cli + " cleanup " + ply + " " + out + " --target-faces 1000 --json > " + (dir / "cleanup.json");
+    ASSERT_EQ(std::system(cleanup.c_str()), 0) << cleanup;
+    const std::string report = test::slurp(dir / "cleanup.json");
+    EXPECT_NE(report.find(R"("normals":"recomputed")"), std::string::npos) << report;
+    EXPECT_NE(report.find("colours and texture coordinates were dropped"), std::string::npos) << report;
+    const Mesh clean = read_mesh(out);
+    ASSERT_LE(clean.triangles.size(), 1000u);
+    ASSERT_TRUE(clean.has_normals());
+    double worst = 0;
+    for (std::size_t v = 0; v < clean.positions.size(); ++v) {
+        const Vec3d radial = normalized(Vec3d(clean.positions[v]));
+        worst = std::max(worst, std::acos(std::clamp(dot(radial, Vec3d(clean.normals[v])), -1.0, 1.0)));
+    }
+    EXPECT_LT(worst * 180 / std::numbers::pi, 5.0);
+    const std::string compress = cli + " compress " + out + " " + glb + " --quiet";
+    ASSERT_EQ(std::system(compress.c_str()), 0) << compress;
+    const Mesh web = read_mesh(glb);
+    ASSERT_TRUE(web.has_normals());
+    EXPECT_EQ(web.triangles.size(), clean.triangles.size());
+}
+#endif
 #endif
 
 }  // namespace
