@@ -103,7 +103,8 @@ Image render_legend(ColorMap map, double lo, double hi, const LegendOptions& opt
     Image img(opt.width, opt.height, opt.background);
     const int scale = 2, text_h = 7 * scale;
     const int margin = 4, tick_len = 4;
-    const int bx0 = margin, bx1 = opt.width - margin;  // bar columns [bx0, bx1)
+    const int swatch = opt.over_color ? std::max(12, opt.width / 16) : 0;  // the over-range swatch's width
+    const int bx0 = margin, bx1 = opt.width - margin - (swatch > 0 ? swatch + margin : 0);  // bar columns [bx0, bx1)
     const int by0 = margin, by1 = opt.height - margin - text_h - tick_len - 2;
     // Border, then the colours inside it.
     fill_rect(img, bx0, by0, bx1, by1, opt.ink);
@@ -123,6 +124,12 @@ Image render_legend(ColorMap map, double lo, double hi, const LegendOptions& opt
         const int w = text_width(s, scale);
         const int lx = k == 0 ? bx0 : (k == opt.ticks - 1 ? bx1 - w : x - w / 2);
         draw_text(img, lx, label_y, s, opt.ink, scale);
+    }
+    if (opt.over_color) {
+        const int sx0 = opt.width - margin - swatch, sx1 = opt.width - margin;
+        fill_rect(img, sx0, by0, sx1, by1, opt.ink);
+        fill_rect(img, sx0 + 1, by0 + 1, sx1 - 1, by1 - 1, *opt.over_color);
+        draw_text(img, sx0 + (swatch - text_width("+", scale)) / 2, label_y, "+", opt.ink, scale);
     }
     return img;
 }

@@ -2,6 +2,7 @@
 /// \file color_map.h
 /// Colour maps for per-vertex scalars and a legend bar image to go with them.
 
+#include <optional>
 #include <string>
 
 #include "io/render/image.h"
@@ -26,10 +27,13 @@ struct LegendOptions {
     Rgb8 background{255, 255, 255};  ///< image background
     Rgb8 ink{0, 0, 0};               ///< border, ticks and labels
     int ticks = 5;  ///< evenly spaced ticks including both ends, in [2, 11]; ends and middle are labelled
+    /// When set, a swatch of this colour right of the bar, for values above hi (RenderOptions::over_color).
+    std::optional<Rgb8> over_color{};
 };
 
 /// A horizontal colour bar from lo (left) to hi (right) with ticks and numeric labels ("%.3g", drawn with a
-/// built-in 5×7 pixel font scaled ×2). Deterministic.
+/// built-in 5×7 pixel font scaled ×2), and with opt.over_color a swatch of that colour after it, labelled "+".
+/// Deterministic.
 /// \throw InvalidInput if the options are out of range or lo, hi are not finite.
 /// Cost: O(width · height).
 Image render_legend(ColorMap map, double lo, double hi, const LegendOptions& opt = {});

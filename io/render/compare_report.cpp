@@ -22,9 +22,11 @@ CompareReportPictures links(const ComparisonPictures& pic, int size) {
     CompareReportPictures l;
     l.size = size;
     l.views = pic.views;
-    for (const MeshPictures& m : pic.meshes) l.meshes.push_back({m.shaded, m.distance, m.max_distance});
+    for (const MeshPictures& m : pic.meshes)
+        l.meshes.push_back({m.shaded, m.distance, m.max_distance, m.clipped_fraction});
     l.legend = pic.legend;
     l.distance_max = pic.distance_max;
+    l.percentile = pic.percentile;
     return l;
 }
 
@@ -48,6 +50,8 @@ CompareReportFiles write_compare_report(const std::string& dir, const CompareRep
         detail::begin(progress, "pictures");
         ComparisonPicturesOptions po;
         po.render.width = po.render.height = opt.picture_size;
+        po.names.push_back(r.reference);  // the pictures are named after the files
+        for (const CompareReportRow& row : r.rows) po.names.push_back(row.name);
         const ComparisonPictures pic = write_comparison_pictures(dir, reference, candidates, po);
         write_text((d / "index.html").string(), to_html(r, links(pic, opt.picture_size)));
         out.pictures_seconds = pic.seconds;

@@ -4,7 +4,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
+#include <set>
 #include <system_error>
 
 #include "core/errors.h"
@@ -24,6 +26,30 @@ std::vector<float> vertex_distances(const Mesh& m, const ClosestTriangleQuery& r
     return d;
 }
 
+namespace {
+
+/// The file stems of ComparisonPicturesOptions::names (see there), or mesh<i>.
+std::vector<std::string> file_stems(const std::vector<std::string>& names, std::size_t count) {
+    std::vector<std::string> out;
+    std::set<std::string> used;
+    for (std::size_t i = 0; i < count; ++i) {
+        std::string s = "mesh" + std::to_string(i);
+        if (!names.empty()) {
+            std::string stem = std::filesystem::path(names[i]).stem().string();
+            for (char& c : stem)
+                if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_')) c = '_';
+            s = (i == 0 ? "reference_" : "") + (stem.empty() ? "mesh" + std::to_string(i) : stem);
+        }
+        std::string unique = s;
+        for (int k = 2; used.count(unique) > 0; ++k) unique = s + "_" + std::to_string(k);
+        used.insert(unique);
+        out.push_back(unique);
+    }
+    return out;
+}
+
+}  // namespace
+
 ComparisonPictures write_comparison_pictures(const std::string& dir, const Mesh& reference,
                                              std::span<const Mesh> candidates, const ComparisonPicturesOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -31,6 +57,11 @@ ComparisonPictures write_comparison_pictures(const std::string& dir, const Mesh&
     if (reference.triangles.empty()) throw InvalidInput("write_comparison_pictures: the reference has no triangles");
     for (std::size_t i = 0; i < candidates.size(); ++i)
         check_mesh(candidates[i], ("write_comparison_pictures: candidate " + std::to_string(i + 1)).c_str());
+    if (!opt.names.empty() && opt.names.size() != candidates.size() + 1)
+        throw InvalidInput("write_comparison_pictures: " + std::to_string(opt.names.size()) + " names for " +
+                           std::to_string(candidates.size() + 1) + " meshes (the reference and the candidates)");
+    if (!(opt.distance_percentile > 0 && opt.distance_percentile <= 100))
+        throw InvalidInput("write_comparison_pictures: distance_percentile must be in (0, 100]");
 
     const std::filesystem::path folder = std::filesystem::path(dir) / opt.subfolder;
     std::error_code ec;
@@ -56,22 +87,48 @@ ComparisonPictures write_comparison_pictures(const std::string& dir, const Mesh&
     std::vector<Camera> cameras;
     for (const Vec3d& d : directions) cameras.push_back(camera_from_box(box, d, opt.projection));
 
-    double range = 0;
+    const std::vector<std::string> stems = file_stems(opt.names, meshes.size());
+    double largest = 0;
     out.meshes.resize(meshes.size());
     for (std::size_t i = 0; i < meshes.size(); ++i) {
         double mx = 0;
         for (float v : dist[i]) mx = std::max(mx, double(v));
         out.meshes[i].max_distance = mx;
-        range = std::max(range, mx);
+        largest = std::max(largest, mx);
         for (const std::string& v : out.views) {
-            const std::string stem = prefix + "mesh" + std::to_string(i) + "_" + v;
+            const std::string stem = prefix + stems[i] + "_" + v;
             out.meshes[i].shaded.push_back(stem + ".png");
             out.meshes[i].distance.push_back(stem + "_distance.png");
         }
     }
-    if (opt.distance_max > 0) range = opt.distance_max;
-    if (!(range > 0)) range = 1e-3 * std::max(box.diagonal(), 1e-30);  // every candidate on the reference
+    // The colour range: a high percentile of every candidate's vertex distances together (one range for all, so
+    // that the pictures compare), unless given; the largest distance when that percentile is 0 (most vertices on
+    // the reference).
+    double range = opt.distance_max;
+    if (!(range > 0) && candidates.size() > 0) {
+        std::vector<float> all;
+        for (std::size_t i = 1; i < dist.size(); ++i) all.insert(all.end(), dist[i].begin(), dist[i].end());
+        if (!all.empty()) {
+            const auto k = std::size_t(std::ceil(opt.distance_percentile / 100.0 * double(all.size()))) - 1;
+            std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(std::min(k, all.size() - 1)), all.end());
+            range = all[std::min(k, all.size() - 1)];
+            out.percentile = opt.distance_percentile;
+        }
+        if (!(range > 0)) {
+            range = largest;
+            out.percentile = 100.0;
+        }
+    }
+    if (!(range > 0)) {  // every candidate on the reference
+        range = 1e-3 * std::max(box.diagonal(), 1e-30);
+        out.percentile = 0.0;
+    }
     out.distance_max = range;
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        std::size_t over = 0;
+        for (float v : dist[i]) over += double(v) > range;
+        out.meshes[i].clipped_fraction = dist[i].empty() ? 0.0 : double(over) / double(dist[i].size());
+    }
 
     const std::filesystem::path root(dir);
     const std::size_t nviews = out.views.size();
@@ -80,6 +137,7 @@ ComparisonPictures write_comparison_pictures(const std::string& dir, const Mesh&
         if (job + 1 == jobs) {
             LegendOptions lo;
             lo.width = std::max(64, opt.render.width);
+            lo.over_color = opt.over_color;
             out.legend = prefix + "legend.png";
             write_png((root / out.legend).string(), render_legend(ColorMap::Viridis, 0.0, range, lo));
             return;
@@ -93,6 +151,7 @@ ComparisonPictures write_comparison_pictures(const std::string& dir, const Mesh&
             ro.color_map = ColorMap::Viridis;
             ro.scalar_min = 0.0;
             ro.scalar_max = range;
+            ro.over_color = opt.over_color;
             path = out.meshes[mesh].distance[view];
         } else {
             ro.vertex_scalars = {};

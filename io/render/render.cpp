@@ -182,7 +182,9 @@ Image render_mesh(const Mesh& m, const Camera& camera, const RenderOptions& opt)
                 if (scalars) {
                     const double v =
                         p0 * opt.vertex_scalars[t[0]] + p1 * opt.vertex_scalars[t[1]] + p2 * opt.vertex_scalars[t[2]];
-                    base = map_color(opt.color_map, (v - opt.scalar_min) * inv_range);
+                    base = opt.over_color && v > opt.scalar_max
+                               ? *opt.over_color
+                               : map_color(opt.color_map, (v - opt.scalar_min) * inv_range);
                 }
                 img.set(px, py, {to_byte(base.r * shade), to_byte(base.g * shade), to_byte(base.b * shade)});
             }

@@ -4,6 +4,7 @@
 /// rasterisation on the CPU, Lambert shading with a little ambient light, optional per-vertex scalars
 /// drawn through a colour map. No GPU, no OpenGL, no dependency.
 
+#include <optional>
 #include <span>
 
 #include "core/mesh.h"
@@ -58,6 +59,9 @@ struct RenderOptions {
     ColorMap color_map = ColorMap::Viridis;
     double scalar_min = 0.0;  ///< value drawn as the map's first colour
     double scalar_max = 1.0;  ///< value drawn as the map's last colour, > scalar_min
+    /// Pixels whose interpolated scalar is above scalar_max get this colour (shaded like the rest) instead of the
+    /// map's last one, so that values clipped by the range stay visible; unset: clamped to the last colour.
+    std::optional<Rgb8> over_color{};
 };
 
 /// Renders m seen by camera: every triangle is projected, rasterised at pixel centres (a pixel is

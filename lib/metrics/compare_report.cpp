@@ -210,7 +210,11 @@ std::string report_html(const CompareReport& a, const CompareReportPictures& pic
             const std::string shown = std::filesystem::path(name).filename().string();
             g += "<tr><td class=\"name\" title=\"" + html_escape(name) + "\">" + (i == 0 ? "reference<br>" : "") +
                  html_escape(shown);
-            if (distance && i > 0) g += "<br>max " + fmt("%.4g", pic.meshes[i].max_distance);
+            if (distance && i > 0) {
+                g += "<br>max " + fmt("%.4g", pic.meshes[i].max_distance);
+                if (pic.meshes[i].clipped_fraction > 0)
+                    g += "<br>" + fmt("%.2g", 100 * pic.meshes[i].clipped_fraction) + "% above the range";
+            }
             g += "</td>";
             const auto& files = distance ? pic.meshes[i].distance : pic.meshes[i].shaded;
             for (std::size_t v = 0; v < files.size(); ++v)
@@ -222,10 +226,18 @@ std::string report_html(const CompareReport& a, const CompareReportPictures& pic
     };
     s += grid("Shaded", "shaded", false);
     s += grid("Distance to the reference", "distance", true);
-    s += "<p>Colour: unsigned distance from each vertex to the reference surface (exact closest point), "
-         "world units, viridis from 0 to " +
-         fmt("%.4g", pic.distance_max) +
-         " (the largest vertex distance over all candidates); the reference row is 0 everywhere. "
+    const std::string range_why =
+        pic.percentile > 0 && pic.percentile < 100
+            ? "the " + fmt("%.3g", pic.percentile) +
+                  "th percentile of all candidates' vertex distances, so that a few far vertices do not set the "
+                  "scale; farther vertices are clipped and drawn magenta, the + swatch of the legend"
+            : (pic.percentile >= 100 ? std::string("the largest vertex distance over all candidates")
+                                     : std::string("as given"));
+    s += "<p>Colour: unsigned distance from each vertex to the reference surface (exact closest point), in the "
+         "length unit of the meshes' coordinates (the reference's bounding-box diagonal is " +
+         fmt("%.4g", a.rows.empty() ? 0.0 : a.rows[0].comparison.reference_diagonal) + "), viridis from 0 to " +
+         fmt("%.4g", pic.distance_max) + ": " + range_why +
+         ". The reference row is 0 everywhere. "
          "Cameras: orthographic, fitted to the reference's bounding box, the same for every mesh.</p>\n"
          "<p><img class=\"legend\" src=\"" +
          html_escape(pic.legend) + "\" alt=\"colour legend, 0 to " + fmt("%.4g", pic.distance_max) + "\"></p>\n";

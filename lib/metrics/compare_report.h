@@ -32,12 +32,14 @@ struct CompareReportPictures {
         std::vector<std::string> shaded;    ///< one picture per view
         std::vector<std::string> distance;  ///< one picture per view, coloured by distance
         double max_distance = 0.0;          ///< largest vertex distance of this mesh, world units
+        double clipped_fraction = 0.0;      ///< fraction of its vertices above distance_max (drawn magenta)
     };
     int size = 400;                  ///< width and height of each picture, pixels
     std::vector<std::string> views;  ///< view names, the columns ("front", "side", "oblique")
     std::vector<Row> meshes;         ///< the reference first, then one per candidate (rows order)
     std::string legend;              ///< the colour legend picture
     double distance_max = 0.0;       ///< top of the colour range, world units
+    double percentile = 0.0;         ///< the percentile of all candidates' vertex distances distance_max is (0: given)
 };
 
 /// The metric table in Markdown, header and separator lines included, one line per candidate

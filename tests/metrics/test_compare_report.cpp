@@ -156,7 +156,16 @@ TEST(CompareReport, HtmlHasTheTableAndThePictures) {
     }
     p.legend = "pictures/legend.png";
     p.distance_max = 0.5;
+    p.percentile = 99;
+    p.meshes[2].clipped_fraction = 0.004;
     const std::string h = to_html(small_report(), p);
+    // The colour range says what it is, its unit, and what was clipped.
+    EXPECT_NE(h.find("viridis from 0 to 0.5: the 99th percentile of all candidates' vertex distances"),
+              std::string::npos)
+        << h;
+    EXPECT_NE(h.find("in the length unit of the meshes' coordinates"), std::string::npos);
+    EXPECT_NE(h.find("<br>max 0.5<br>0.4% above the range</td>"), std::string::npos) << h;
+    EXPECT_EQ(h.find("<br>max 0.25<br>"), std::string::npos);  // nothing clipped there
     EXPECT_EQ(h.rfind("<!DOCTYPE html>\n", 0), 0u);
     EXPECT_EQ(h.substr(h.size() - 16), "</body>\n</html>\n");
     EXPECT_NE(h.find("<p>Reference: <code>ref.ply</code></p>"), std::string::npos);

@@ -162,8 +162,12 @@ def mode_decode(exe, work):
         other = os.path.join(b, os.path.relpath(p, a))
         if open(p, "rb").read() != open(other, "rb").read():
             fail(f"{p} and {other} differ: output is not deterministic")
+    # The pictures are named after the files: the reference sphere.obj, the candidates noisy.ply and sphere.obj.
+    for name in ("reference_sphere_front.png", "noisy_side_distance.png", "sphere_oblique_distance.png"):
+        if not os.path.exists(os.path.join(a, "pictures", name)):
+            fail(f"no pictures/{name} in {a}: {[os.path.basename(f) for f in files]}")
     # The reference's distance picture uses only shades of the first viridis colour (68, 1, 84).
-    w, h, ch, rows = decode_png(os.path.join(a, "pictures", "mesh0_front_distance.png"))
+    w, h, ch, rows = decode_png(os.path.join(a, "pictures", "reference_sphere_front_distance.png"))
     for row in rows:
         for i in range(0, len(row), 3):
             r, g, bb = row[i:i + 3]

@@ -314,7 +314,13 @@ TEST(ComparisonPictures, WritesEveryPictureWithASharedRange) {
     EXPECT_EQ(p.meshes[0].max_distance, 0.0);
     EXPECT_NEAR(p.meshes[1].max_distance, 0.05, 0.01);
     EXPECT_NEAR(p.meshes[2].max_distance, 0.2, 0.01);
-    EXPECT_EQ(p.distance_max, p.meshes[2].max_distance);
+    // The 99th percentile of both candidates' vertex distances: within the far candidate's, at most its top 1%.
+    EXPECT_EQ(p.percentile, 99.0);
+    EXPECT_LE(p.distance_max, p.meshes[2].max_distance);
+    EXPECT_GT(p.distance_max, 0.19);
+    EXPECT_EQ(p.meshes[1].clipped_fraction, 0.0);
+    EXPECT_LE(p.meshes[2].clipped_fraction * double(cands[1].positions.size()),
+              0.01 * double(cands[0].positions.size() + cands[1].positions.size()) + 1);
     EXPECT_EQ(p.legend, "pictures/legend.png");
     std::size_t files = 0;
     for (const auto& e : std::filesystem::directory_iterator(dir.path() / "pictures")) files += e.is_regular_file();
@@ -342,6 +348,60 @@ TEST(ComparisonPictures, WritesEveryPictureWithASharedRange) {
     write_comparison_pictures(dir2.path().string(), ref, cands);
     EXPECT_EQ(test::slurp(dir.path() / p.meshes[1].distance[2]), test::slurp(dir2.path() / p.meshes[1].distance[2]));
     EXPECT_EQ(test::slurp(dir.path() / p.legend), test::slurp(dir2.path() / p.legend));
+}
+
+std::size_t count_color(const Image& img, Rgb8 c) {
+    std::size_t n = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) n += img.at(x, y) == c;
+    return n;
+}
+
+// One far vertex (a spike) does not set the colour range of every candidate: the range is the 99th percentile of
+// the candidates' vertex distances, the spike's vertex is counted as clipped and drawn in the over-range colour,
+// and the legend has a swatch of it. The files are named after the meshes.
+TEST(ComparisonPictures, OneFarVertexDoesNotSetTheRangeAndIsMarked) {
+    const Mesh ref = test::icosphere(1.0, 3);
+    std::vector<Mesh> cands{test::icosphere(1.02, 3), test::icosphere(1.05, 3)};
+    Mesh& spiky = cands[0];
+    std::size_t top = 0;  // the vertex nearest the front camera (views along -z see +z)
+    for (std::size_t v = 1; v < spiky.positions.size(); ++v)
+        if (spiky.positions[v].z > spiky.positions[top].z) top = v;
+    spiky.positions[top] = spiky.positions[top] * 1.5f;
+    ComparisonPicturesOptions o;
+    o.render.ambient = 1.0;  // colours unshaded, so that the over-range colour is exact
+    o.names = {"/data/gt.ply", "runs/a b.ply", "other/a b.ply"};
+    test::TempDir dir;
+    const ComparisonPictures p = write_comparison_pictures(dir.path().string(), ref, cands, o);
+    EXPECT_NEAR(p.meshes[1].max_distance, 0.53, 0.02);
+    EXPECT_NEAR(p.distance_max, 0.05, 0.01);  // not 0.53: the spike is one vertex of 1284
+    EXPECT_NEAR(p.meshes[1].clipped_fraction, 1.0 / double(spiky.positions.size()), 1e-12);
+    EXPECT_EQ(p.meshes[0].shaded[0], "pictures/reference_gt_front.png");
+    EXPECT_EQ(p.meshes[1].distance[0], "pictures/a_b_front_distance.png");
+    EXPECT_EQ(p.meshes[2].distance[2], "pictures/a_b_2_oblique_distance.png");
+    // The front distance picture is the spiky sphere drawn with the over-range colour (the same bytes), which shows
+    // at the spike; without that colour the spike is the map's last colour, like the top of the range.
+    RenderOptions ro = o.render;
+    const std::vector<float> d = vertex_distances(spiky, *make_bvh_query(ref));
+    ro.vertex_scalars = d;
+    ro.scalar_max = p.distance_max;
+    const Camera front_camera = camera_from_box(bounding_box(ref), {0, 0, -1});
+    EXPECT_EQ(count_color(render_mesh(spiky, front_camera, ro), o.over_color), 0u);
+    ro.over_color = o.over_color;
+    const Image front = render_mesh(spiky, front_camera, ro);
+    EXPECT_GT(count_color(front, o.over_color), 0u);
+    const std::vector<std::uint8_t> bytes = encode_png(front);
+    EXPECT_EQ(test::slurp(dir.path() / p.meshes[1].distance[0]), std::string(bytes.begin(), bytes.end()));
+    // The legend has a swatch of it, and only when asked.
+    EXPECT_GT(
+        count_color(render_legend(ColorMap::Viridis, 0, 1, LegendOptions{.over_color = o.over_color}), o.over_color),
+        0u);
+    EXPECT_EQ(count_color(render_legend(ColorMap::Viridis, 0, 1), o.over_color), 0u);
+    o.names = {"only_one.ply"};
+    EXPECT_THROW(write_comparison_pictures(dir.path().string(), ref, cands, o), InvalidInput);
+    o.names.clear();
+    o.distance_percentile = 0;
+    EXPECT_THROW(write_comparison_pictures(dir.path().string(), ref, cands, o), InvalidInput);
 }
 
 // Real model: the GNF bunny (70k faces) and its noisy version; the pictures must be well under 2 s.
