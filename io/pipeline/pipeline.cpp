@@ -529,6 +529,13 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.seconds.extract += seconds;
         r.seconds.total += seconds;
     }
+    // The scan conversion's note on an open mesh is about the volume: a result that keeps the input's openings
+    // (its own mesh, or the surface trimmed to its footprint) needs no word on them; a closed one spans them.
+    if (open && !r.scan.open_mesh_warning.empty()) {
+        std::erase(r.warnings, r.scan.open_mesh_warning);
+        if (!keep && o.closed)
+            r.warnings.push_back("the input is open: the closed result spans its holes and boundaries");
+    }
     if (!keep) {
         result.mesh = volume_to_mesh(v, o, &r, progress, &m);
         std::unique_ptr<ClosestTriangleQuery> q;
@@ -558,8 +565,9 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     set_volume_normals(result.mesh, v);  // replaces the input's normals, which belong to the noisy surface
     r.connectivity_kept = true;
     if (r.fit.outside_band > 0)
-        r.warnings.push_back(std::to_string(r.fit.outside_band) +
-                             " vertices were outside the volume's band and stayed where they were");
+        r.warnings.push_back(std::to_string(r.fit.outside_band) + " of the " + std::to_string(r.fit.vertices) +
+                             " vertices were left unsmoothed: the smoothed surface is farther from them than its band "
+                             "(at open borders, spikes, strays or parts thinner than a voxel)");
     const double seconds = fit_clock.lap();
     r.seconds.extract += seconds;
     r.seconds.total += seconds;

@@ -399,14 +399,17 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
 
     rep.blocks = vol.block_count();
     rep.memory_bytes = vol.memory_bytes();
-    if (rep.uncertain_sign > 0)
-        rep.warnings.push_back("scan_convert: " + std::to_string(rep.uncertain_sign) +
-                               " band samples have an uncertain sign (winding number within 0.1 of 1/2): the mesh "
-                               "has holes or open boundaries there");
-    if (rep.tile_conflict_blocks > 0)
-        rep.warnings.push_back("scan_convert: " + std::to_string(rep.tile_conflict_blocks) +
-                               " blocks away from the surface had an inside/outside conflict (open mesh) and were "
-                               "stored as inside, so the extracted surface stays closed");
+    if (rep.uncertain_sign > 0 || rep.tile_conflict_blocks > 0) {
+        std::string detail;
+        if (rep.uncertain_sign > 0)
+            detail = "inside and outside uncertain at " + std::to_string(rep.uncertain_sign) + " samples near them";
+        if (rep.tile_conflict_blocks > 0)
+            detail += (detail.empty() ? "" : "; ") + std::to_string(rep.tile_conflict_blocks) +
+                      " blocks away from the surface taken as inside";
+        rep.open_mesh_warning =
+            "scan_convert: the mesh is open (holes or boundaries): the volume is closed across them (" + detail + ")";
+        rep.warnings.push_back(rep.open_mesh_warning);
+    }
     if (report) *report = std::move(rep);
     return vol;
 }

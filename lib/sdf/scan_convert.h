@@ -36,6 +36,9 @@ struct ScanConvertReport {
     double seconds_sign = 0;               ///< wall time: winding-number tree build and tile signs
     std::size_t memory_bytes = 0;          ///< bytes held by the returned volume
     std::vector<std::string> warnings;     ///< oddities handled (uncertain signs, ...)
+    /// The one warning of warnings about an open mesh (holes or boundaries: the volume closed across them), so that
+    /// a caller whose result keeps the openings can drop it; empty for a closed mesh.
+    std::string open_mesh_warning;
 };
 
 /// Signed distance to m, negative inside, in world units, stored in a narrow band of

@@ -280,6 +280,23 @@ TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
     EXPECT_GT(moved, 0.0);
     EXPECT_LT(worst, 0.1);
     EXPECT_NE(to_json(kept.report).dump().find("\"connectivity\":\"kept\""), std::string::npos);
+    // The scan conversion closed the volume across the hole and said so once; the kept, open result needs no word
+    // on it, a closed result is told that it spans the hole (issue 38, item 6).
+    ASSERT_FALSE(kept.report.scan.open_mesh_warning.empty());
+    EXPECT_EQ(std::count(kept.report.scan.warnings.begin(), kept.report.scan.warnings.end(),
+                         kept.report.scan.open_mesh_warning),
+              1);
+    const auto has = [](const std::vector<std::string>& w, const std::string& s) {
+        return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.find(s) != std::string::npos; });
+    };
+    EXPECT_FALSE(has(kept.report.warnings, "is open"));
+    PipelineOptions closing = o;
+    closing.closed = true;
+    closing.connectivity = Connectivity::Remesh;
+    const PipelineResult spanned = smooth_mesh(open, closing);
+    EXPECT_TRUE(mesh_report(spanned.mesh).closed);
+    EXPECT_TRUE(has(spanned.report.warnings, "the input is open: the closed result spans its holes"));
+    EXPECT_FALSE(has(spanned.report.warnings, "scan_convert: the mesh is open"));
 
     // a closed input: kept when its fitted faces agree with the result (a clean sphere), re-meshed when
     // the noise tangled its triangles along the surface (kAutoKeepFitAngleDeg)

@@ -163,6 +163,13 @@ TEST(ScanConvert, SmallHolesKeepTheClosedSign) {
             }
     EXPECT_GT(checked, 10000u);
     EXPECT_EQ(wrong, 0u);
+    // Said once, as what it means for the volume.
+    EXPECT_GT(rep.uncertain_sign + rep.tile_conflict_blocks, 0u);
+    ASSERT_EQ(rep.warnings.size(), 1u);
+    EXPECT_EQ(rep.warnings[0], rep.open_mesh_warning);
+    EXPECT_NE(rep.open_mesh_warning.find("the mesh is open (holes or boundaries): the volume is closed across them"),
+              std::string::npos)
+        << rep.open_mesh_warning;
 }
 
 TEST(ScanConvert, NestedShellsComponentsAndDuplicates) {
