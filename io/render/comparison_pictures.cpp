@@ -109,9 +109,10 @@ ComparisonPictures write_comparison_pictures(const std::string& dir, const Mesh&
         std::vector<float> all;
         for (std::size_t i = 1; i < dist.size(); ++i) all.insert(all.end(), dist[i].begin(), dist[i].end());
         if (!all.empty()) {
-            const auto k = std::size_t(std::ceil(opt.distance_percentile / 100.0 * double(all.size()))) - 1;
-            std::nth_element(all.begin(), all.begin() + std::ptrdiff_t(std::min(k, all.size() - 1)), all.end());
-            range = all[std::min(k, all.size() - 1)];
+            const auto rank = std::size_t(std::ceil(opt.distance_percentile / 100.0 * double(all.size())));
+            const auto kth = all.begin() + std::ptrdiff_t(std::min(rank, all.size()) - 1);
+            std::nth_element(all.begin(), kth, all.end());
+            range = *kth;
             out.percentile = opt.distance_percentile;
         }
         if (!(range > 0)) {
