@@ -20,6 +20,18 @@ namespace normalflow::cli {
 
 namespace {
 
+/// "N triangles", and where the compact default decimated the result, from how many (the line says what was done).
+std::string triangles_note(const Mesh& m, const PipelineReport& r) {
+    std::string s = std::to_string(m.triangles.size()) + " triangles";
+    if (r.compacted)
+        s += ", decimated from " + std::to_string(r.decimate.faces_before) + "; --full-density keeps them all";
+    return s;
+}
+
+}  // namespace
+
+namespace {
+
 struct VoxelizeArgs {
     std::string input, output;
     PipelineOptions pipeline;
@@ -188,13 +200,13 @@ int run_extract(const ExtractArgs& a) {
     Json j = Json::object();
     j.set("command", "extract").set("extract", to_json(r.extract));
     j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
-    if (r.decimated) j.set("decimate", to_json(r.decimate));
+    if (r.decimated) j.set("decimate", to_json(r.decimate).set("default", r.compacted));
     j.set("seconds",
           Json::object().set("read", t_read).set("extract", r.seconds.extract).set("decimate", r.seconds.decimate));
     j.set("warnings", Json::array(r.warnings));
     write_result(a.output, m, progress, j);
     finish(j, a.out, total, progress);
-    progress.note("extract: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles)");
+    progress.note("extract: " + a.output + " (" + triangles_note(m, r) + ")");
     return 0;
 }
 
@@ -242,7 +254,7 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" +
                   (volume_out ? "the smoothed volume, " + std::to_string(v.block_count()) + " blocks"
-                              : std::to_string(result.mesh.triangles.size()) + " triangles") +
+                              : triangles_note(result.mesh, r)) +
                   ")");
     return 0;
 }
@@ -304,7 +316,7 @@ int run_smooth(const SmoothArgs& a) {
                       ": the filtered normal map is smooth at the filter's scale");
     write_result(a.output, m, progress, j, a.draco);
     finish(j, a.out, total, progress);
-    progress.note("smooth: " + a.output + " (" + std::to_string(m.triangles.size()) + " triangles, " +
+    progress.note("smooth: " + a.output + " (" + triangles_note(m, r) + ", " +
                   (r.connectivity_kept ? "the input's mesh, fitted, " : "") +
                   std::to_string(int(total.seconds() * 10) / 10.0).substr(0, 5) + " s)");
     return 0;
@@ -334,7 +346,7 @@ int run_remesh(const RemeshArgs& a) {
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
     write_result(a.output, result.mesh, progress, j, a.draco);
     finish(j, a.out, total, progress);
-    progress.note("remesh: " + a.output + " (" + std::to_string(result.mesh.triangles.size()) + " triangles)");
+    progress.note("remesh: " + a.output + " (" + triangles_note(result.mesh, r) + ")");
     return 0;
 }
 

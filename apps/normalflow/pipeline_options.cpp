@@ -3,6 +3,7 @@
 #include "pipeline_options.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <string>
 
@@ -175,6 +176,12 @@ void add_decimation_options(CLI::App* cmd, PipelineOptions& p) {
                     "decimate the result while each collapse stays within E (world units) of the surface's tangent "
                     "planes: an adaptive mesh, coarse where flat (with --target-faces, whichever stops first)")
         ->check(CLI::PositiveNumber);
+    char compact[160];
+    std::snprintf(compact, sizeof compact, "decimated within %g voxel of its surface and %g degrees of its normals",
+                  kCompactErrorVoxels, kCompactNormalDeviationDeg);
+    cmd->add_flag("--full-density", p.full_density,
+                  std::string("keep every triangle of a re-meshed result (default: ") + compact +
+                      ", a mesh whose size follows its shape)");
     add_decimator_option(cmd, p.decimator);
 }
 

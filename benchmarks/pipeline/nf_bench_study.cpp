@@ -127,6 +127,9 @@ int main(int argc, char** argv) {
     // normalflow rows: iso, aniso, bilateral, guided at --resolution; default: the pipeline's defaults
     // (PipelineOptions{}: its mode and the automatic resolution), what `normalflow smooth IN OUT` runs
     std::string modes = "aniso,bilateral,default";
+    // --decimation-sweep E1,E2,...: each re-meshed pipeline row again, decimated within E voxels (max_error)
+    // voxels, and with E:DEGREES also no face turned more than DEGREES from the field's normals at its corners
+    std::vector<std::pair<double, double>> sweep;
     CompareOptions co;
     co.sampling.samples = 50000;
     for (int i = 1; i < argc; ++i) {
@@ -148,7 +151,16 @@ int main(int argc, char** argv) {
             with_normalflow = false;
         else if (a == "--modes" && has)
             modes = argv[++i];
-        else if (!a.starts_with("--"))
+        else if (a == "--decimation-sweep" && has) {
+            for (std::string list = argv[++i]; !list.empty();) {
+                const std::size_t comma = list.find(',');
+                const std::string item = list.substr(0, comma);  // E or E:DEGREES
+                const std::size_t colon = item.find(':');
+                sweep.push_back({std::atof(item.substr(0, colon).c_str()),
+                                 colon == std::string::npos ? 0.0 : std::atof(item.substr(colon + 1).c_str())});
+                list = comma == std::string::npos ? "" : list.substr(comma + 1);
+            }
+        } else if (!a.starts_with("--"))
             data = a;
         else {
             std::fprintf(stderr, "nf_bench_study: unknown or incomplete argument %s\n", a.c_str());
@@ -263,9 +275,27 @@ int main(int argc, char** argv) {
                     o.connectivity = connectivity;
                     o.scan.threads = o.smooth.threads = threads;
                     const PipelineResult res = smooth_mesh(noisy, o);
-                    add(std::string("normalflow ") + token + " (" + to_string(defaults.smooth.mode) + ", " +
-                            (res.report.connectivity_kept ? "kept" : "remeshed") + ")",
-                        "R=auto " + std::to_string(res.report.scan_options.resolution), now_ms() - t0, res.mesh);
+                    const double ms = now_ms() - t0;
+                    const std::string name = std::string("normalflow ") + token + " (" +
+                                             to_string(defaults.smooth.mode) + ", " +
+                                             (res.report.connectivity_kept ? "kept" : "remeshed") + ")";
+                    const std::string res_params = "R=auto " + std::to_string(res.report.scan_options.resolution);
+                    add(name, res_params + ", " + std::to_string(res.mesh.triangles.size()) + " faces", ms, res.mesh);
+                    if (res.report.connectivity_kept) continue;
+                    // the re-meshed result's vertex normals are the field's (set_volume_normals): the decimation
+                    // the pipeline runs, on the same mesh
+                    for (const auto& [e, deg] : sweep) {
+                        Mesh d = res.mesh;
+                        const double t1 = now_ms();
+                        const DecimationReport dr = decimate_mesh(d, {.max_error = e * res.report.scan.grid.voxel_size,
+                                                                      .tangent_planes = true,
+                                                                      .max_normal_deviation_deg = deg,
+                                                                      .measure_distance = false});
+                        char p[160];
+                        std::snprintf(p, sizeof p, "%s, max error %g voxel, %g°, %zu faces%s", res_params.c_str(), e,
+                                      deg, d.triangles.size(), dr.fallback.empty() ? "" : " (cgal)");
+                        add(name + " decimated", p, ms + now_ms() - t1, d);
+                    }
                 }
             }
             for (const auto& [label, path] : p.published) add(label, "", 0, read_mesh(path.string()));

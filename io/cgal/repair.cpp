@@ -60,12 +60,18 @@ struct ReverseRecorder : PMP::Default_orientation_visitor {
 
 std::size_t count_self_intersections(const Mesh& mesh) { return self_intersecting_pairs(mesh).size(); }
 
+std::size_t count_self_intersections_as_written(const Mesh& mesh) {
+    return self_intersecting_pairs(mesh, nullptr, false).size();
+}
+
 std::vector<std::pair<std::uint32_t, std::uint32_t>> self_intersecting_pairs(const Mesh& mesh,
-                                                                             const std::vector<char>* only) {
+                                                                             const std::vector<char>* only, bool weld) {
     check_mesh(mesh, "count_self_intersections");
     if (only && only->size() != mesh.triangles.size())
         throw InvalidInput("self_intersecting_pairs: one flag per face expected");
-    const Mesh m = weld_exact(mesh);
+    Mesh welded;
+    if (weld) welded = weld_exact(mesh);
+    const Mesh& m = weld ? welded : mesh;
     std::vector<Point> pts;
     pts.reserve(m.positions.size());
     for (const auto& p : m.positions) pts.emplace_back(p.x, p.y, p.z);

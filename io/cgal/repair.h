@@ -33,9 +33,16 @@ std::size_t count_self_intersections(const Mesh& m);
 
 /// The pairs counted by count_self_intersections, as face indices of m (smaller first), sorted; with `only` (one
 /// flag per face), just the pairs with a flagged face (a local change checked without the cost of the whole mesh's
-/// candidate pairs).
+/// candidate pairs). weld = false: m's vertex indices are its connectivity, as a reader of the written file sees
+/// them, so two faces that touch at distinct vertices with the same position count (a surface that pinches itself
+/// where a processing step made two vertices meet); this is the check of a result normalflow writes.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> self_intersecting_pairs(const Mesh& m,
-                                                                             const std::vector<char>* only = nullptr);
+                                                                             const std::vector<char>* only = nullptr,
+                                                                             bool weld = true);
+
+/// count_self_intersections without welding (self_intersecting_pairs with weld = false): the count an independent
+/// evaluator reading the written file finds (CGAL's self_intersections on the mesh as it is).
+std::size_t count_self_intersections_as_written(const Mesh& m);
 
 /// Which repairs repair_mesh performs, in this order.
 struct RepairOptions {

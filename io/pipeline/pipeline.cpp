@@ -211,10 +211,13 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
 
 namespace {
 
-/// Gives the vertices of every face that intersects another face their position in `before`, until no face
-/// does (an extraction is free of self-intersections, so this ends). The number of vertices given back; -1
-/// without CGAL, which finds them.
-long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before) {
+/// Gives the vertices of every face that intersects another face, touches one at a distinct vertex of the same
+/// position (two vertices moved onto one corner) or lost its area their position in `before`, until no face
+/// does (an extraction is free of all three, so this ends). The number of vertices given back; -1 without CGAL,
+/// which finds the intersections.
+/// weld: the vertex indices are not the connectivity (a kept input, which may be a soup): faces meeting at
+/// coincident vertices share them.
+long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before, bool weld = false) {
 #ifdef NORMALFLOW_HAS_CGAL
     long long restored = 0;
     std::vector<char> done(m.positions.size(), 0), changed(m.positions.size(), 0), marked(m.triangles.size());
@@ -226,7 +229,12 @@ long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before) 
             const Tri& t = m.triangles[f];
             marked[f] = changed[t[0]] || changed[t[1]] || changed[t[2]];
         }
-        const auto pairs = self_intersecting_pairs(m, &marked);
+        auto pairs = self_intersecting_pairs(m, &marked, weld);
+        for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+            const Tri& t = m.triangles[f];
+            if (marked[f] && exactly_collinear(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]))
+                pairs.emplace_back(std::uint32_t(f), std::uint32_t(f));
+        }
         if (pairs.empty()) break;
         std::fill(changed.begin(), changed.end(), 0);
         for (const auto& [a, b] : pairs)
@@ -243,6 +251,7 @@ long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before) 
 #else
     (void)m;
     (void)before;
+    (void)weld;
     return -1;
 #endif
 }
@@ -270,6 +279,22 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
                 "shrink away); raise --resolution or lower --iterations");
         throw InvalidInput("the volume holds no surface (every sample has the same sign)");
     }
+    if (reference) {
+        // the input's parts, welded as mesh_report counts them; a re-meshing adds none
+        const std::size_t parts = mesh_report(*reference).components;
+        r.components = remove_extra_components(m, parts, kExtraComponentAreaFraction);
+        const std::size_t left = r.components.components - r.components.removed;
+        if (r.components.removed > 0)
+            r.warnings.push_back("removed " + std::to_string(r.components.removed) +
+                                 " small closed pieces the volume added (each under " +
+                                 str(100 * kExtraComponentAreaFraction) +
+                                 "% of the area: where the input's inside was uncertain, or specks the processing "
+                                 "split off)");
+        if (left > parts)
+            r.warnings.push_back("the result has " + std::to_string(left) + " parts, the input " +
+                                 std::to_string(parts) +
+                                 ": the processing split a part thinner than a few voxels (raise --resolution)");
+    }
     if (o.sharpen) {
         detail::begin(progress, "sharpen");
         const std::vector<Vec3f> extracted = m.positions;
@@ -284,17 +309,20 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
         r.sharpened = true;
         r.seconds.extract += clock.lap();
     }
-    if (o.target_faces > 0 || o.max_error > 0) {
+    const bool compact = !o.full_density && o.target_faces == 0 && o.max_error == 0;
+    if (o.target_faces > 0 || o.max_error > 0 || compact) {
         detail::begin(progress, "decimate");
         // Hermite data: the field's normal at each vertex, so that the quadrics see the surface the
         // volume holds rather than the extraction's one-voxel bevels at creases (benchmarks/README.md,
         // "Sharp extraction"); a sharpened surface's own faces lie on the input's planes already.
         set_volume_normals(m, v);
         r.decimate = decimate_mesh(m, {.target_faces = o.target_faces,
-                                       .max_error = o.max_error,
+                                       .max_error = compact ? kCompactErrorVoxels * v.grid.voxel_size : o.max_error,
                                        .decimator = o.decimator,
-                                       .tangent_planes = !o.sharpen});
+                                       .tangent_planes = !o.sharpen,
+                                       .max_normal_deviation_deg = compact ? kCompactNormalDeviationDeg : 0.0});
         r.decimated = true;
+        r.compacted = compact;
         append(r.warnings, r.decimate.warnings);
         r.seconds.decimate = clock.lap();
     }
@@ -329,9 +357,9 @@ std::string broken_guarantee(const MeshReport& before, const MeshReport& after, 
     return "";
 }
 
-long long self_intersection_pairs([[maybe_unused]] const Mesh& m) {
+long long self_intersection_pairs([[maybe_unused]] const Mesh& m, [[maybe_unused]] bool weld = false) {
 #ifdef NORMALFLOW_HAS_CGAL
-    return static_cast<long long>(count_self_intersections(m));
+    return static_cast<long long>(weld ? count_self_intersections(m) : count_self_intersections_as_written(m));
 #else
     return -1;
 #endif
@@ -386,7 +414,9 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
         result = m;
         decimate_mesh_qem(result, {.target_faces = target_faces,
                                    .max_error = options.max_error,
-                                   .tangent_planes = options.tangent_planes && m.normals.size() == m.positions.size()});
+                                   .tangent_planes = options.tangent_planes && m.normals.size() == m.positions.size(),
+                                   .max_normal_deviation_deg =
+                                       m.normals.size() == m.positions.size() ? options.max_normal_deviation_deg : 0});
         rep.seconds_decimate += t.lap();
         rep.decimator = "quadric";
         rep.self_intersections = self_intersection_pairs(result);
@@ -505,6 +535,33 @@ double model_length_scale(const Mesh& m) {
     return *mid;
 }
 
+namespace {
+
+/// Checks the result as it will be written (PipelineReport::output) and says what breaks a promise: a re-meshed
+/// surface is manifold, without degenerate faces, free of self-intersections and, unless it was trimmed to an
+/// open input's footprint, closed; a kept mesh has no more intersecting pairs than the input had (input_pairs).
+void check_output(const Mesh& m, PipelineReport& r, bool remeshed, bool closed, long long input_pairs = 0) {
+    r.output = mesh_report(m);
+    r.output_self_intersections = self_intersection_pairs(m, !remeshed);
+    r.checked = true;
+    const MeshReport& o = r.output;
+    std::string what;
+    const auto add = [&](const std::string& s) { what += (what.empty() ? "" : ", ") + s; };
+    if (remeshed) {
+        if (closed && !o.closed) add(std::to_string(o.boundary_edges) + " boundary edges");
+        if (!o.manifold)
+            add(std::to_string(o.non_manifold_edges) + " non-manifold edges and " +
+                std::to_string(o.non_manifold_vertices) + " non-manifold vertices");
+        if (o.degenerate_faces > 0) add(std::to_string(o.degenerate_faces) + " degenerate faces");
+    }
+    if (r.output_self_intersections > std::max(0LL, input_pairs))
+        add(std::to_string(r.output_self_intersections) + " pairs of intersecting faces" +
+            (input_pairs > 0 ? " (the input had " + std::to_string(input_pairs) + ")" : ""));
+    if (!what.empty()) r.warnings.push_back("the result has " + what);
+}
+
+}  // namespace
+
 PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* progress) {
     PipelineResult result;
     PipelineReport& r = result.report;
@@ -537,9 +594,15 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
             r.warnings.push_back("the input is open: the closed result spans its holes and boundaries");
     }
     if (!keep) {
-        result.mesh = volume_to_mesh(v, o, &r, progress, &m);
+        // An open input's surface is trimmed before the compact default decimates it: the cut then runs through the
+        // extraction's small faces, and the decimation keeps the open border where the cut left it.
+        const bool trim = open && !o.closed;
+        const bool compact_after_trim = trim && !o.full_density && o.target_faces == 0 && o.max_error == 0;
+        PipelineOptions extraction = o;
+        extraction.full_density = extraction.full_density || compact_after_trim;
+        result.mesh = volume_to_mesh(v, extraction, &r, progress, &m);
         std::unique_ptr<ClosestTriangleQuery> q;
-        if (open && !o.closed) {
+        if (trim) {
             Stopwatch trim_clock;
             q = make_bvh_query(m);
             // the cap lies away from the input; the smoothed surface within its noise (a fraction of an edge)
@@ -554,20 +617,39 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
             r.seconds.extract += seconds;
             r.seconds.total += seconds;
         }
+        if (compact_after_trim) {
+            Stopwatch clock;
+            detail::begin(progress, "decimate");
+            // the trimmed surface keeps the field's normals (set_volume_normals), the decimation's tangent planes
+            r.decimate = decimate_mesh(result.mesh, {.max_error = kCompactErrorVoxels * v.grid.voxel_size,
+                                                     .tangent_planes = !o.sharpen,
+                                                     .max_normal_deviation_deg = kCompactNormalDeviationDeg});
+            r.decimated = r.compacted = true;
+            append(r.warnings, r.decimate.warnings);
+            set_volume_normals(result.mesh, v);
+            r.seconds.decimate = clock.lap();
+            r.seconds.total += r.seconds.decimate;
+        }
         if (m.has_colors()) transfer_colors(result.mesh, m, q ? *q : *(q = make_bvh_query(m)));
         if (m.has_texcoords())
             r.warnings.push_back(
                 "texture coordinates dropped: re-meshing makes new vertices "
                 "(--connectivity keep keeps them)");
+        check_output(result.mesh, r, true, !r.trimmed);
         return result;
     }
     result.mesh = std::move(fitted);
+    // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
+    // pushed through each other. The vertices of faces that now intersect (or lost their area) go back to where the
+    // input had them, until none does: the kept mesh has no intersection the input did not have.
+    r.fit_restored = restore_self_intersections(result.mesh, m.positions, /*weld=*/true);
     set_volume_normals(result.mesh, v);  // replaces the input's normals, which belong to the noisy surface
     r.connectivity_kept = true;
     if (r.fit.outside_band > 0)
         r.warnings.push_back(std::to_string(r.fit.outside_band) + " of the " + std::to_string(r.fit.vertices) +
                              " vertices were left unsmoothed: the smoothed surface is farther from them than its band "
                              "(at open borders, spikes, strays or parts thinner than a voxel)");
+    check_output(result.mesh, r, false, false, self_intersection_pairs(m, true));
     const double seconds = fit_clock.lap();
     r.seconds.extract += seconds;
     r.seconds.total += seconds;
@@ -607,7 +689,10 @@ PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress
     PipelineReport& r = result.report;
     r.scan.grid = v.grid;
     if (o.smoothing) smooth_volume_stage(v, o, kVolumeLengthScaleVoxels * v.grid.voxel_size, &r, progress, normal_map);
-    if (want_mesh) result.mesh = volume_to_mesh(v, o, &r, progress);
+    if (want_mesh) {
+        result.mesh = volume_to_mesh(v, o, &r, progress);
+        check_output(result.mesh, r, true, true);
+    }
     r.peak_memory_bytes = peak_memory_bytes();
     return result;
 }

@@ -77,6 +77,19 @@ inline constexpr double kAutoKeepFitAngleDeg = 2.5;
 /// about one voxel wide; two let vertices cross and meet: fandisk at 256, benchmarks/README.md "Sharp re-meshing").
 inline constexpr double kSharpenMaxMoveVoxels = 1.0;
 
+/// A re-meshed result is decimated by default (PipelineOptions::full_density false) while each collapse stays
+/// within this many voxels of the surface's tangent planes: the extraction is only as exact as its grid, and the
+/// marching-tetrahedra surface has several triangles per voxel, far more than its shape needs.
+/// Chosen on the study's re-meshed pairs (benchmarks/README.md, "Compact output by default").
+inline constexpr double kCompactErrorVoxels = 0.1;
+/// ... and while no face turns more than this (degrees) from the surface's normals at its corners: the distance
+/// alone lets faces grow on gentle bends until their shading is visibly faceted.
+inline constexpr double kCompactNormalDeviationDeg = 4.0;
+/// Components of a re-meshed result beyond the input's count are removed when each has less than this fraction of
+/// the result's area (remove_extra_components): bubbles where the input's inside was uncertain, specks a smoothing
+/// split off. Larger ones stay, with a warning.
+inline constexpr double kExtraComponentAreaFraction = 0.01;
+
 /// Which decimator target_faces runs (decimate_mesh).
 enum class Decimator {
     Auto,           ///< Quadric, its result checked; CGAL's edge collapse instead where that result breaks a
@@ -158,6 +171,10 @@ struct PipelineOptions {
     double max_error = 0;
     /// The decimator target_faces and max_error run.
     Decimator decimator = Decimator::Auto;
+    /// false (the default): a re-meshed result without target_faces or max_error is decimated within
+    /// kCompactErrorVoxels of its surface and kCompactNormalDeviationDeg of its normals, a mesh whose size follows
+    /// its shape; true: every triangle of the extraction is kept.
+    bool full_density = false;
     /// A re-meshing without smoothing (smoothing = false, the surface re-meshed): move the extracted vertices onto
     /// the input's creases and corners (sharpen_mesh, the input as the reference) before any decimation, which then
     /// keeps them (face planes, not the field's rounded normals). Faces a move made intersect get their vertices
@@ -194,15 +211,25 @@ struct PipelineReport {
     bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
     bool fitted = false;             ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
     FitReport fit;                   ///< valid when fitted
-    bool trimmed = false;            ///< an open input's re-meshed result was trimmed to its footprint
-    TrimReport trim;                 ///< valid when trimmed
-    bool sharpened = false;          ///< the extraction was sharpened to the input (options.sharpen)
-    SharpenReport sharpen;           ///< valid when sharpened
+    /// Kept: vertices given back their input position because the fit made their faces intersect others (or lose
+    /// their area); -1: not checked (a build without CGAL).
+    long long fit_restored = 0;
+    bool trimmed = false;    ///< an open input's re-meshed result was trimmed to its footprint
+    TrimReport trim;         ///< valid when trimmed
+    bool sharpened = false;  ///< the extraction was sharpened to the input (options.sharpen)
+    SharpenReport sharpen;   ///< valid when sharpened
     /// Sharpened: vertices given back their extracted position because their faces intersected others; -1: not
     /// checked (a build without CGAL).
     long long sharpen_restored = 0;
-    bool decimated = false;     ///< decimation ran (target_faces > 0)
-    DecimationReport decimate;  ///< valid when decimated
+    ComponentsRemoved components;  ///< the extraction's components and those removed as extra (re-meshed inputs)
+    bool decimated = false;        ///< decimation ran (target_faces, max_error, or the compact default)
+    bool compacted = false;        ///< the decimation was the compact default (not asked for)
+    DecimationReport decimate;     ///< valid when decimated
+    /// What the written result is, checked at the end: closed, manifold, degenerate faces, and the pairs of faces
+    /// that intersect as the file has them (count_self_intersections_as_written; -1 without CGAL).
+    bool checked = false;
+    MeshReport output;
+    long long output_self_intersections = -1;
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order
@@ -294,6 +321,9 @@ struct DecimationOptions {
     /// The quadric decimator builds its quadrics from the tangent planes of m.normals (QemOptions::
     /// tangent_planes): for an extracted surface with the field's normals (set_volume_normals).
     bool tangent_planes = false;
+    /// With tangent_planes, > 0: no face of the result turned more than this (degrees) from m.normals at its
+    /// corners (QemOptions::max_normal_deviation_deg); the quadric decimator only.
+    double max_normal_deviation_deg = 0;
     /// m's mesh_report, when the caller has it: the guarantees are checked against it instead of
     /// computing it again (0.7 s for a million faces).
     const MeshReport* input_report = nullptr;

@@ -180,6 +180,7 @@ Json to_json(const PipelineReport& r) {
             .set("mean_distance", r.fit.mean_distance)
             .set("max_distance", r.fit.max_distance)
             .set("mean_face_angle_deg", r.fit.mean_face_angle_deg);
+        if (r.connectivity_kept) f.set("restored", r.fit_restored);
         j.set("fit", f);
     }
     if (!r.connectivity_kept) j.set("extract", to_json(r.extract));
@@ -199,7 +200,20 @@ Json to_json(const PipelineReport& r) {
         t.set("faces_removed", r.trim.faces_removed).set("components_removed", r.trim.components_removed);
         j.set("trim", t);
     }
-    if (r.decimated) j.set("decimate", to_json(r.decimate));
+    if (!r.connectivity_kept && r.components.components > 0)
+        j.set("components", Json::object()
+                                .set("input", r.components.allowed)
+                                .set("extracted", r.components.components)
+                                .set("removed", r.components.removed)
+                                .set("faces_removed", r.components.faces));
+    if (r.decimated) j.set("decimate", to_json(r.decimate).set("default", r.compacted));
+    if (r.checked)
+        j.set("checked", Json::object()
+                             .set("closed", r.output.closed)
+                             .set("manifold", r.output.manifold)
+                             .set("degenerate_faces", r.output.degenerate_faces)
+                             .set("components", r.output.components)
+                             .set("self_intersecting_pairs", r.output_self_intersections));
     Json s = Json::object();
     s.set("repair", r.seconds.repair)
         .set("voxelize", r.seconds.voxelize)
@@ -259,6 +273,7 @@ Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double v
         .set("sharpen", o.sharpen)
         .set("target_faces", o.target_faces)
         .set("max_error", o.max_error)
+        .set("full_density", o.full_density)
         .set("decimator", to_string(o.decimator));
     return j;
 }

@@ -1,10 +1,12 @@
 #include "core/mesh.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
 
 #include "core/errors.h"
+#include "core/union_find.h"
 
 namespace normalflow {
 
@@ -75,6 +77,52 @@ void compute_vertex_normals(Mesh& m) {
         const double len = norm(sum[v]);
         if (len > 0 && std::isfinite(len)) m.normals[v] = Vec3f(sum[v] / len);
     }
+}
+
+ComponentsRemoved remove_extra_components(Mesh& m, std::size_t allowed, double max_area_fraction) {
+    ComponentsRemoved r;
+    r.allowed = allowed;
+    detail::UnionFind<std::uint32_t> uf(m.positions.size());
+    for (const Tri& t : m.triangles) {
+        uf.unite(t[0], t[1]);
+        uf.unite(t[0], t[2]);
+    }
+    std::vector<std::uint32_t> id(m.positions.size(), std::numeric_limits<std::uint32_t>::max());
+    std::vector<double> area;
+    std::vector<std::uint32_t> face_component(m.triangles.size());
+    double total = 0;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+        std::uint32_t& c = id[uf.find(m.triangles[f][0])];
+        if (c == std::numeric_limits<std::uint32_t>::max()) {
+            c = std::uint32_t(area.size());
+            area.push_back(0);
+        }
+        face_component[f] = c;
+        const double a = 0.5 * norm(face_area_vector(m, m.triangles[f]));
+        area[c] += a;
+        total += a;
+    }
+    r.components = area.size();
+    if (area.size() <= allowed) return r;
+    std::vector<std::uint32_t> order(area.size());
+    for (std::uint32_t c = 0; c < order.size(); ++c) order[c] = c;
+    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return area[a] < area[b]; });
+    std::vector<char> drop(area.size(), 0);
+    for (std::size_t k = 0; k + allowed < order.size(); ++k) {
+        const std::uint32_t c = order[k];
+        if (!(area[c] < max_area_fraction * total)) break;
+        drop[c] = 1;
+        ++r.removed;
+        r.largest_area_fraction = total > 0 ? area[c] / total : 0;
+    }
+    if (r.removed == 0) return r;
+    std::size_t kept = 0;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f)
+        if (!drop[face_component[f]]) m.triangles[kept++] = m.triangles[f];
+    r.faces = m.triangles.size() - kept;
+    m.triangles.resize(kept);
+    remove_unreferenced_vertices(m);
+    return r;
 }
 
 }  // namespace normalflow

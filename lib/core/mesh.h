@@ -74,6 +74,22 @@ struct Box3d {
 /// Cost: one pass over the triangles and one over the positions; single-threaded.
 void check_mesh(const Mesh& m, std::string_view who);
 
+/// What remove_extra_components removed.
+struct ComponentsRemoved {
+    std::size_t allowed = 0;           ///< the parts allowed (the input's)
+    std::size_t components = 0;        ///< connected components before
+    std::size_t removed = 0;           ///< of these, removed
+    std::size_t faces = 0;             ///< faces removed
+    double largest_area_fraction = 0;  ///< area of the largest removed, as a fraction of the total (0: none)
+};
+
+/// Removes from m the connected components (faces joined through shared vertex indices) beyond the `allowed`
+/// largest, smallest area first, each only while its area is below max_area_fraction of m's: what a processing step
+/// added to a surface that had `allowed` parts (a bubble where the sign of a volume was uncertain, a speck a
+/// smoothing split off), not a part of the shape. Unreferenced vertices go, with their attributes.
+/// Cost: O(F log F) (union-find over the faces, a sort of the components).
+ComponentsRemoved remove_extra_components(Mesh& m, std::size_t allowed, double max_area_fraction);
+
 /// Drops the vertices no triangle uses; the others keep their original order and their attributes,
 /// and the triangles are renumbered. Cost: two passes over the triangles and one over the vertices.
 void remove_unreferenced_vertices(Mesh& m);

@@ -53,6 +53,13 @@ struct Placement {
     float error;
 };
 
+/// The inner angle (degrees) below which two neighbouring faces count as folded onto each other: a decimation makes
+/// no fold sharper than this unless the faces there were already that sharp (QemDecimation::allowed).
+constexpr double kMinFoldDeg = 30.0;
+/// An error-bounded decimation ends at the first pass that removes fewer than this fraction of the faces.
+constexpr double kTailFraction = 0.002;
+const double kCosFold = -std::cos(kMinFoldDeg * std::numbers::pi / 180.0);
+
 double quality(const Vec3d& a, const Vec3d& b, const Vec3d& c, Vec3d* normal) {
     const Vec3d n = cross(b - a, c - a);
     if (normal) *normal = n;
@@ -184,6 +191,15 @@ public:
         });
         faces_ = nf;
         cos_max_ = std::cos(opt_.max_normal_change_deg * std::numbers::pi / 180.0);
+        if (opt_.max_normal_deviation_deg > 0) {  // decimate_mesh_qem checked that m has a normal per vertex
+            cos_deviation_ = std::cos(opt_.max_normal_deviation_deg * std::numbers::pi / 180.0);
+            normal_.resize(nv);
+            for (std::size_t v = 0; v < nv; ++v) {
+                const Vec3d n(m.normals[v]);
+                const double len = norm(n);
+                normal_[v] = len > 0 ? n / len : Vec3d{};
+            }
+        }
         max_error2_ = opt_.max_error * opt_.max_error;
     }
 
@@ -224,6 +240,10 @@ public:
                 }
             faces_ -= 2 * made;
             rep.collapses += made;
+            // Bounded by max_error alone (no count to reach): a pass that removes under kTailFraction of the faces
+            // ends it. Refused edges reopen whenever a neighbour changes, and a normal bound refuses many: the tail
+            // of such passes, each the cost of a whole pass, took 100 s for the last few faces of a 1.3 M-face shell.
+            if (opt_.target_faces == 0 && double(2 * made) < kTailFraction * double(faces_)) break;
         }
         write_back();
         rep.faces_after = m_.triangles.size();
@@ -236,6 +256,13 @@ private:
     /// Per-thread scratch of a collapse's checks.
     struct Scratch {
         std::vector<std::uint32_t> shared, nk, ng, common;
+        /// the merged vertex's faces: their two other corners and their normal (unit) before and after
+        struct Fan {
+            std::uint32_t a, b;
+            int side;  ///< 0: a face of keep, 1: of gone (before the collapse)
+            Vec3d before, after;
+        };
+        std::vector<Fan> fan;
     };
 
     /// Costs the edges of the alive faces into their slots (3 per face), each edge once (from the face
@@ -437,6 +464,7 @@ private:
         // the merged vertex's neighbours, (N(keep) ∪ N(gone)) less keep and gone: at least 3
         if (sc.nk.size() + sc.ng.size() < 7) return false;
         // Faces that stay: no fold, no degenerate or much worse shape.
+        sc.fan.clear();
         for (int side = 0; side < 2; ++side)
             for (std::uint32_t f : side ? fg : fk) {
                 const Tri& t = tris_[f];
@@ -454,8 +482,35 @@ private:
                 const double l0 = norm(n0), l1 = norm(n1);
                 if (!(l1 > 0)) return false;
                 if (l0 > 0 && dot(n0, n1) < cos_max_ * l0 * l1) return false;
+                std::uint32_t other[2], n = 0;
+                for (int k = 0; k < 3; ++k)
+                    if (t[k] != keep && t[k] != gone) other[n++] = t[k];
+                sc.fan.push_back({other[0], other[1], side, l0 > 0 ? n0 / l0 : Vec3d{}, n1 / l1});
                 if (q1 < opt_.min_quality && q1 < q0) return false;
+                if (!normal_.empty()) {  // the turn from the surface's normals at the corners: bounded, or no worse
+                    double c0 = 1, c1 = 1;
+                    for (int k = 0; k < 3; ++k) {
+                        const Vec3d& n = normal_[t[k] == gone ? keep : t[k]];
+                        c1 = std::min(c1, dot(n1, n) / l1);
+                        if (l0 > 0) c0 = std::min(c0, dot(n0, normal_[t[k]]) / l0);
+                    }
+                    if (c1 < cos_deviation_ && c1 < c0) return false;
+                }
             }
+        // No new sharp fold: two faces of the merged vertex that share an edge (each turned within
+        // max_normal_change_deg, together up to twice that) meet at an inner angle of kMinFoldDeg or more, or at no
+        // sharper angle than the sharpest two of its faces met before. A fold a few degrees wide is a surface
+        // doubling back on itself: tetrahedra there are slivers.
+        double before = 1, after = 1;
+        for (std::size_t i = 0; i < sc.fan.size(); ++i)
+            for (std::size_t j = i + 1; j < sc.fan.size(); ++j) {
+                const auto& p = sc.fan[i];
+                const auto& q = sc.fan[j];
+                if (p.a != q.a && p.a != q.b && p.b != q.a && p.b != q.b) continue;  // no shared edge at x
+                after = std::min(after, dot(p.after, q.after));
+                if (p.side == q.side) before = std::min(before, dot(p.before, q.before));  // neighbours before too
+            }
+        if (after < kCosFold && after < before) return false;
         return true;
     }
 
@@ -517,6 +572,8 @@ private:
     std::vector<Tri> tris_;
     std::size_t faces_ = 0;
     double cos_max_ = 0.5;
+    double cos_deviation_ = -1.0;  ///< max_normal_deviation_deg's cosine
+    std::vector<Vec3d> normal_;    ///< unit surface normal per vertex (m.normals), when that bound is on
     double max_error2_ = 0.0;
     std::vector<std::uint64_t> keys_;          ///< per slot (3 per face): the candidate key, or kNoCandidate
     std::vector<Placement> place_;             ///< per slot: the costed placement
@@ -545,6 +602,11 @@ QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt) {
     if (!(opt.max_normal_change_deg > 0 && opt.max_normal_change_deg <= 180))
         throw InvalidInput("decimate_mesh: max_normal_change_deg must be in (0, 180], got " +
                            std::to_string(opt.max_normal_change_deg));
+    if (!(opt.max_normal_deviation_deg >= 0 && opt.max_normal_deviation_deg <= 180))
+        throw InvalidInput("decimate_mesh: max_normal_deviation_deg must be in [0, 180], got " +
+                           std::to_string(opt.max_normal_deviation_deg));
+    if (opt.max_normal_deviation_deg > 0 && m.normals.size() != m.positions.size())
+        throw InvalidInput("decimate_mesh: max_normal_deviation_deg needs a normal per vertex (m.normals)");
     if (!(opt.min_quality >= 0 && opt.min_quality < 1))
         throw InvalidInput("decimate_mesh: min_quality must be in [0, 1), got " + std::to_string(opt.min_quality));
     QemReport rep = QemDecimation(m, opt).run();

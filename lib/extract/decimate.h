@@ -39,6 +39,12 @@ struct QemOptions {
     /// truncated solve (eigenvalues below 2% of the largest dropped, as dual contouring does), so nearly
     /// parallel planes do not slide it along a crease they do not make.
     bool tangent_planes = false;
+    /// > 0 (degrees; m needs normals): a collapse that leaves a face turned from the surface's normal
+    /// (m.normals) at one of its corners by more than this, and by more than that face was before, is refused. The
+    /// bound on the shading error that max_error, a distance, does not give: on a bend of radius R a face of
+    /// width w turns w / 2R from its corners' normals, so faces stay small where the surface bends and grow
+    /// where it is flat. 0: no bound.
+    double max_normal_deviation_deg = 0.0;
 };
 
 /// What decimate_mesh_qem did.

@@ -81,3 +81,45 @@ TEST(CheckMesh, IndicesAreCheckedBeforePositions) {
 
 }  // namespace
 }  // namespace normalflow
+
+namespace normalflow {
+namespace {
+
+/// A closed tetrahedron scaled by s about c, its vertices appended to m.
+void add_tetrahedron(Mesh& m, double s, Vec3d c) {
+    const auto b = std::uint32_t(m.positions.size());
+    for (const Vec3d p : {Vec3d{1, 1, 1}, Vec3d{1, -1, -1}, Vec3d{-1, 1, -1}, Vec3d{-1, -1, 1}})
+        m.positions.push_back(Vec3f(c + p * s));
+    for (const Tri t : {Tri{0, 1, 2}, Tri{0, 3, 1}, Tri{0, 2, 3}, Tri{1, 3, 2}})
+        m.triangles.push_back({b + t[0], b + t[1], b + t[2]});
+}
+
+// Two parts allowed: the smallest of four goes when it is under the area fraction, the second smallest only when it
+// is too; a part as large as the fraction stays (the caller warns of it). Attributes follow the vertices.
+TEST(RemoveExtraComponents, SmallestBeyondTheAllowedGoWhileUnderTheFraction) {
+    Mesh m;
+    add_tetrahedron(m, 1.0, {0, 0, 0});
+    add_tetrahedron(m, 0.01, {5, 0, 0});  // area 1e-4 of the first
+    add_tetrahedron(m, 1.0, {10, 0, 0});
+    add_tetrahedron(m, 0.3, {20, 0, 0});  // area 0.09 of the first, 0.04 of the total
+    for (std::size_t i = 0; i < m.positions.size(); ++i) m.normals.push_back(Vec3f(Vec3d{double(i), 0, 0}));
+    Mesh a = m;
+    ComponentsRemoved r = remove_extra_components(a, 2, 0.01);
+    EXPECT_EQ(r.components, 4u);
+    EXPECT_EQ(r.removed, 1u);  // the speck; the 0.3 tetrahedron is 4% of the area
+    EXPECT_EQ(r.faces, 4u);
+    EXPECT_EQ(a.triangles.size(), 12u);
+    EXPECT_EQ(a.positions.size(), 12u);
+    EXPECT_EQ(a.normals[4].x, 8.0f);  // the third tetrahedron's first vertex, moved down with its normal
+    Mesh b = m;
+    r = remove_extra_components(b, 2, 0.05);
+    EXPECT_EQ(r.removed, 2u);
+    EXPECT_EQ(b.triangles.size(), 8u);
+    EXPECT_NEAR(r.largest_area_fraction, 0.09 / 2.0901, 1e-3);
+    Mesh c = m;
+    EXPECT_EQ(remove_extra_components(c, 4, 1.0).removed, 0u);  // as many parts as allowed: nothing goes
+    EXPECT_EQ(c.triangles.size(), m.triangles.size());
+}
+
+}  // namespace
+}  // namespace normalflow

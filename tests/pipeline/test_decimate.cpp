@@ -468,12 +468,15 @@ TEST(TangentPlanes, PipelineDecimatesWithinTheErrorBound) {
     PipelineOptions o;
     o.smoothing = false;
     o.scan.resolution = 48;
+    o.full_density = true;
     const Volume v = mesh_to_volume(box, o);
     const Mesh dense = volume_to_mesh(v, o);
+    o.full_density = false;  // an explicit max_error wins over the compact default
     o.max_error = 0.02 * v.grid.voxel_size;
     PipelineReport r;
     const Mesh m = volume_to_mesh(v, o, &r);
     ASSERT_TRUE(r.decimated);
+    EXPECT_FALSE(r.compacted);
     EXPECT_EQ(r.decimate.decimator, "quadric");
     EXPECT_EQ(r.decimate.faces_before, dense.triangles.size());
     EXPECT_EQ(r.decimate.faces_after, m.triangles.size());
@@ -544,6 +547,58 @@ TEST(DecimateMesh, CliReportsTheDecimator) {
     EXPECT_NE(std::system(bad.c_str()), 0);
 }
 #endif
+
+}  // namespace
+}  // namespace normalflow
+
+namespace normalflow {
+namespace {
+
+// Two faces that touch at distinct vertices with the same position: no intersection once welded (they share the
+// vertex), one as written (a reader of the file sees the surface pinch there). The check of normalflow's outputs.
+TEST(SelfIntersections, AsWrittenCountsFacesTouchingAtCoincidentVertices) {
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+    Mesh m;
+    m.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 0}, {-1, 0, 0.5f}, {0, -1, 0.5f}};
+    m.triangles = {{0, 1, 2}, {3, 4, 5}};
+    EXPECT_EQ(count_self_intersections(m), 0u);
+    EXPECT_EQ(count_self_intersections_as_written(m), 1u);
+    m.positions[3] = {0, 0, 0.25f};  // apart: neither counts
+    EXPECT_EQ(count_self_intersections_as_written(m), 0u);
+#else
+    GTEST_SKIP() << "needs CGAL";
+#endif
+}
+
+// The normal bound: every face of the result within the bound of the surface's normals at its corners (or no worse
+// than it started), on a sphere whose normals are exact; fewer faces with a looser bound; none of it without normals.
+TEST(TangentPlanes, NormalDeviationBoundHolds) {
+    Mesh sphere = test::icosphere(1.0, 5);
+    for (const Vec3f& p : sphere.positions) sphere.normals.push_back(Vec3f(normalized(Vec3d(p))));
+    auto worst = [](const Mesh& m) {
+        double w = 0;
+        for (const Tri& t : m.triangles) {
+            const Vec3d n = normalized(face_area_vector(m, t));
+            for (const std::uint32_t v : t)
+                w = std::max(w, std::acos(std::clamp(dot(n, normalized(Vec3d(m.normals[v]))), -1.0, 1.0)) * 180 /
+                                    3.14159265358979);
+        }
+        return w;
+    };
+    const double start = worst(sphere);
+    std::size_t faces[2];
+    for (const int k : {0, 1}) {
+        const double bound = k == 0 ? 4.0 : 12.0;
+        Mesh m = sphere;
+        decimate_mesh_qem(m, {.max_error = 0.05, .tangent_planes = true, .max_normal_deviation_deg = bound});
+        EXPECT_LE(worst(m), std::max(bound, start) + 1e-6) << bound;
+        faces[k] = m.triangles.size();
+    }
+    EXPECT_LT(faces[1], faces[0] / 2);
+    EXPECT_LT(faces[0], sphere.triangles.size() / 2);  // the bound still lets it decimate
+    Mesh bare = test::icosphere(1.0, 2);
+    EXPECT_THROW(decimate_mesh_qem(bare, {.max_error = 0.1, .max_normal_deviation_deg = 4}), InvalidInput);
+}
 
 }  // namespace
 }  // namespace normalflow

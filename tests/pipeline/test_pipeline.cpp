@@ -63,7 +63,15 @@ TEST(Pipeline, SphereGivesAClosedManifoldMeshNearTheInput) {
     EXPECT_TRUE(rep.repaired || !rep.warnings.empty());  // without CGAL: the "repair skipped" warning
     EXPECT_TRUE(rep.smoothed);
     EXPECT_EQ(rep.smooth.iterations_run(), 3);
-    EXPECT_EQ(rep.extract.triangles, out.triangles.size());
+    // the compact default: the extraction decimated, and the line to tell it
+    ASSERT_TRUE(rep.decimated && rep.compacted);
+    EXPECT_EQ(rep.extract.triangles, rep.decimate.faces_before + rep.components.faces);
+    EXPECT_EQ(rep.decimate.faces_after, out.triangles.size());
+    EXPECT_LT(out.triangles.size(), rep.extract.triangles);
+    EXPECT_TRUE(rep.checked && rep.output.closed && rep.output.manifold);
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+    EXPECT_EQ(rep.output_self_intersections, 0);
+#endif
     EXPECT_GT(rep.seconds.total, 0);
     EXPECT_GE(rep.seconds.total, rep.seconds.voxelize + rep.seconds.smooth + rep.seconds.extract - 1e-9);
 }

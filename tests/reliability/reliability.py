@@ -6,6 +6,8 @@
   reliability.py NORMALFLOW memory EXAMPLE       --max-memory refuses before allocating, exit 6, no file
   reliability.py NORMALFLOW scale                the same shape at 1e-4 and 1e5 units gives the same result
   reliability.py NORMALFLOW web EXAMPLE          smooth straight to a decimated Draco .glb
+  reliability.py NORMALFLOW promises DATA CHECK  remesh and smooth of the dirty set keep their promises (CHECK:
+                                                 nf_check_surface, an independent evaluator)
 
 Each run must end in one of two ways: exit 0 with a closed manifold mesh, or a non-zero exit with
 one line on stderr that names the input or output file, and no output file. A signal (crash) or
@@ -93,6 +95,54 @@ def dirty(nf, data):
                     refused += 1
                     print(f"refused: {name}: {p.stderr.strip()}")
     print(f"dirty set: {len(files)} files x {len(MODES)} modes: {ok} closed manifold outputs, {refused} clear refusals")
+
+
+def promises(nf, data, checker):
+    """remesh and smooth of every dirty mesh with the defaults keep what they promise, by normalflow's own check
+    (the report's "checked") and by an evaluator that shares no code with it (nf_check_surface: CGAL's
+    self_intersections on the file as written): a re-meshed result is closed (unless trimmed to an open input),
+    manifold, without degenerate faces or intersecting faces, and has no more parts than the input; no warning
+    hides a broken promise. simplify_brain runs at resolution 200 (the default, 512, takes minutes)."""
+    files = sorted(os.path.join(d, f) for d, _, fs in os.walk(os.path.join(data, "dirty")) for f in fs
+                   if f.lower().endswith(MESH_EXT))
+    if not files:
+        print(f"SKIP: no meshes under {data}/dirty")
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        for f in files:
+            extra = ["--resolution", "200"] if "simplify_brain" in f else []
+            for command in ("remesh", "smooth"):
+                out = os.path.join(tmp, "out.ply")
+                name = f"{command} {os.path.relpath(f, data)}"
+                p, dt = run([nf, command, f, out, "--json"] + extra, timeout=600)
+                if p.returncode != 0:
+                    fail(f"{name}: status {p.returncode}: {p.stderr.strip()[-300:]}")
+                    continue
+                j = json.loads(p.stdout.strip().splitlines()[-1])
+                c = j.get("checked", {})
+                ev = json.loads(subprocess.run([checker, out], capture_output=True, text=True,
+                                               check=True).stdout.strip().splitlines()[-1])
+                parts_in = j.get("components", {}).get("input")
+                print(f"{name}: {dt:.1f} s, {ev['faces']} faces, {j['connectivity']}, checked {c}, "
+                      f"independent {ev}", flush=True)
+                if j["connectivity"] == "remeshed":
+                    trimmed = "trim" in j
+                    if not (c.get("manifold") and (c.get("closed") or trimmed) and c.get("degenerate_faces") == 0):
+                        fail(f"{name}: the re-meshed result is not as promised: {c}")
+                    if ev["self_intersecting_pairs"] != 0 or c.get("self_intersecting_pairs") != 0:
+                        fail(f"{name}: intersecting faces: {ev['self_intersecting_pairs']} (independent), "
+                             f"{c.get('self_intersecting_pairs')} (own)")
+                    if ev["split_vertices"] != 0 or ev["degenerate_faces"] != 0:
+                        fail(f"{name}: the independent check splits {ev['split_vertices']} vertices, finds "
+                             f"{ev['degenerate_faces']} degenerate faces")
+                    if not trimmed and ev["border_edges"] != 0:
+                        fail(f"{name}: {ev['border_edges']} border edges in a closed result")
+                    if parts_in is not None and c.get("components", 0) > parts_in and not any(
+                            "parts, the input" in w for w in j["warnings"]):
+                        fail(f"{name}: {c.get('components')} parts from an input of {parts_in}, without a word")
+                elif c.get("self_intersecting_pairs", 0) > 0 and not any("intersecting" in w for w in j["warnings"]):
+                    fail(f"{name}: the kept mesh gained intersecting faces without a word: {c}")
+                os.remove(out)
 
 
 def sigint(nf, example):
@@ -240,6 +290,8 @@ def main():
         scale(nf)
     elif what == "web":
         web(nf, sys.argv[3])
+    elif what == "promises":
+        promises(nf, sys.argv[3], sys.argv[4])
     else:
         sys.exit(f"unknown check {what}")
     if failures:
