@@ -1,6 +1,7 @@
 #include "extract/decimate.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <cstring>
 #include <numbers>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -585,6 +587,73 @@ private:
 
 }  // namespace
 
+std::size_t unfold_by_flips(Mesh& m, double min_inner_deg) {
+    const double cos_fold = -std::cos(min_inner_deg * std::numbers::pi / 180.0);
+    auto& T = m.triangles;
+    const auto key = [](std::uint32_t a, std::uint32_t b) {
+        return a < b ? std::uint64_t(a) << 32 | b : std::uint64_t(b) << 32 | a;
+    };
+    // each edge's faces (two on a manifold edge; others are left alone)
+    std::unordered_map<std::uint64_t, std::array<std::uint32_t, 3>> faces;  // [0], [1], count
+    faces.reserve(T.size() * 2);
+    for (std::uint32_t f = 0; f < T.size(); ++f)
+        for (int k = 0; k < 3; ++k) {
+            auto& e = faces[key(T[f][k], T[f][(k + 1) % 3])];
+            if (e[2] < 2) e[e[2]] = f;
+            ++e[2];
+        }
+    const auto normal = [&](const Tri& t) {
+        const Vec3d n = cross(Vec3d(m.positions[t[1]]) - Vec3d(m.positions[t[0]]),
+                              Vec3d(m.positions[t[2]]) - Vec3d(m.positions[t[0]]));
+        const double l = norm(n);
+        return l > 0 ? n / l : Vec3d{};
+    };
+    // the cosine between a face (as t) and the other face on its edge (u, v)
+    const auto across = [&](const Tri& t, std::uint32_t self, std::uint32_t u, std::uint32_t v, std::uint32_t skip) {
+        const auto it = faces.find(key(u, v));
+        if (it == faces.end() || it->second[2] != 2) return 1.0;
+        const std::uint32_t o = it->second[0] == self || it->second[0] == skip ? it->second[1] : it->second[0];
+        if (o == self || o == skip) return 1.0;
+        return dot(normal(t), normal(T[o]));
+    };
+    std::size_t flips = 0;
+    for (int pass = 0; pass < 8; ++pass) {
+        std::size_t made = 0;
+        for (std::uint32_t f = 0; f < T.size(); ++f)
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t a = T[f][k], b = T[f][(k + 1) % 3], c = T[f][(k + 2) % 3];
+                const auto it = faces.find(key(a, b));
+                if (it == faces.end() || it->second[2] != 2) continue;
+                const std::uint32_t g = it->second[0] == f ? it->second[1] : it->second[0];
+                if (dot(normal(T[f]), normal(T[g])) >= cos_fold) continue;
+                std::uint32_t d =
+                    T[g][0] != a && T[g][0] != b ? T[g][0] : (T[g][1] != a && T[g][1] != b ? T[g][1] : T[g][2]);
+                if (d == c || faces.count(key(c, d))) continue;
+                const Tri f1{c, a, d}, g1{d, b, c};
+                const Vec3d n1 = normal(f1), n2 = normal(g1);
+                if (norm(n1) == 0 || norm(n2) == 0) continue;
+                // the sharpest angle at the five edges, before and after
+                const double before =
+                    std::min({dot(normal(T[f]), normal(T[g])), across(T[f], f, b, c, g), across(T[f], f, c, a, g),
+                              across(T[g], g, a, d, f), across(T[g], g, d, b, f)});
+                const double after = std::min({dot(n1, n2), across(f1, f, c, a, g), across(f1, g, a, d, f),
+                                               across(g1, g, d, b, f), across(g1, f, b, c, g)});
+                if (!(after > before)) continue;
+                faces.erase(key(a, b));
+                faces[key(c, d)] = {f, g, 2};
+                for (auto& x : faces[key(a, d)]) x = x == g ? f : x;
+                for (auto& x : faces[key(b, c)]) x = x == f ? g : x;
+                T[f] = f1;
+                T[g] = g1;
+                ++made;
+                break;  // f changed
+            }
+        flips += made;
+        if (made == 0) break;
+    }
+    return flips;
+}
+
 QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
     check_mesh(m, "decimate_mesh");
@@ -610,6 +679,7 @@ QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt) {
     if (!(opt.min_quality >= 0 && opt.min_quality < 1))
         throw InvalidInput("decimate_mesh: min_quality must be in [0, 1), got " + std::to_string(opt.min_quality));
     QemReport rep = QemDecimation(m, opt).run();
+    rep.folds_flipped = unfold_by_flips(m, kMinFoldDeg);
     rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return rep;
 }

@@ -58,6 +58,8 @@ struct QemReport {
     /// area-weighted RMS distance of the new vertex to the planes of the faces it stands for.
     double max_error = 0.0;
     bool reached_target = false;  ///< faces_after <= target_faces
+    /// Edges flipped afterwards to open folds the collapses left between faces (unfold_by_flips).
+    std::size_t folds_flipped = 0;
     double seconds = 0.0;
 };
 
@@ -81,5 +83,14 @@ struct QemReport {
 /// until its neighbourhood changes. Cost: O(F log F) time per pass, a few dozen passes; about 350 bytes
 /// per vertex at most. The result does not depend on the thread count.
 QemReport decimate_mesh_qem(Mesh& m, const QemOptions& opt);
+
+/// Opens folds: where two faces on a manifold edge meet at an inner angle under min_inner_deg (their normals nearly
+/// opposite: the surface doubles back, and tetrahedra there are slivers), the edge is flipped to the other diagonal
+/// of the two faces if that makes the sharpest angle at the five edges involved less sharp and the new edge is not
+/// one already. Sequential passes over the faces in order (deterministic), at most 8. Vertices and attributes are
+/// untouched; a consistently oriented mesh stays so. Returns the number of flips. decimate_mesh_qem runs it with
+/// 30°: a collapse checks the folds around its own vertex only, not at the edges of its ring, which its neighbours'
+/// collapses in the same pass may change.
+std::size_t unfold_by_flips(Mesh& m, double min_inner_deg);
 
 }  // namespace normalflow

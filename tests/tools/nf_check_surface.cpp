@@ -52,8 +52,8 @@ int main(int argc, char** argv) {
             std::printf(
                 "{\"file\":\"%s\",\"faces\":%zu,\"self_intersecting_pairs\":%zu,\"border_edges\":%zu,"
                 "\"components\":%zu,\"split_vertices\":%zu,\"degenerate_faces\":%zu}\n",
-                argv[i], std::size_t(sm.number_of_faces()), pairs.size(), border, components,
-                points.size() - before, degenerate);
+                argv[i], std::size_t(sm.number_of_faces()), pairs.size(), border, components, points.size() - before,
+                degenerate);
         } catch (const std::exception& e) {
             std::fprintf(stderr, "nf_check_surface: %s: %s\n", argv[i], e.what());
             status = 1;
