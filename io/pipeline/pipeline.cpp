@@ -258,6 +258,38 @@ long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before, 
 
 }  // namespace
 
+namespace {
+
+/// The compact default (PipelineOptions::full_density false): m decimated within kCompactErrorVoxels of the field's
+/// tangent planes and kCompactNormalDeviationDeg of its normals (which m gets here, set_volume_normals), by the
+/// quadric decimation and its local repair only: where that result would break what m is (closed, manifold, free of
+/// self-intersections), m stays as it is, with a warning, rather than going to CGAL's edge collapse, which takes
+/// tens of minutes on a surface of millions of faces. Fills r's decimate, decimated, compacted, seconds.decimate.
+void compact_surface(Mesh& m, const Volume& v, const PipelineOptions& o, PipelineReport& r, Progress* progress) {
+    // --decimator applies to --target-faces and --max-error; the compact default is the quadric decimation
+    Stopwatch clock;
+    detail::begin(progress, "decimate");
+    set_volume_normals(m, v);
+    Mesh decimated = m;
+    DecimationReport d = decimate_mesh(decimated, {.max_error = kCompactErrorVoxels * v.grid.voxel_size,
+                                                   .decimator = Decimator::Quadric,  // the normal bound is its own
+                                                   .tangent_planes = !o.sharpen,
+                                                   .max_normal_deviation_deg = kCompactNormalDeviationDeg,
+                                                   .local_repair = true});
+    r.decimate = d;
+    r.decimated = true;
+    if (d.warnings.empty()) {
+        m = std::move(decimated);
+        r.compacted = true;
+    } else {
+        r.warnings.push_back("kept every triangle: the compact decimation's result was not clean (" +
+                             d.warnings.front() + ")");
+    }
+    r.seconds.decimate = clock.lap();
+}
+
+}  // namespace
+
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* report, Progress* progress,
                     const Mesh* reference) {
     if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
@@ -310,19 +342,19 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
         r.seconds.extract += clock.lap();
     }
     const bool compact = !o.full_density && o.target_faces == 0 && o.max_error == 0;
-    if (o.target_faces > 0 || o.max_error > 0 || compact) {
+    if (compact) {
+        compact_surface(m, v, o, r, progress);
+    } else if (o.target_faces > 0 || o.max_error > 0) {
         detail::begin(progress, "decimate");
         // Hermite data: the field's normal at each vertex, so that the quadrics see the surface the
         // volume holds rather than the extraction's one-voxel bevels at creases (benchmarks/README.md,
         // "Sharp extraction"); a sharpened surface's own faces lie on the input's planes already.
         set_volume_normals(m, v);
         r.decimate = decimate_mesh(m, {.target_faces = o.target_faces,
-                                       .max_error = compact ? kCompactErrorVoxels * v.grid.voxel_size : o.max_error,
+                                       .max_error = o.max_error,
                                        .decimator = o.decimator,
-                                       .tangent_planes = !o.sharpen,
-                                       .max_normal_deviation_deg = compact ? kCompactNormalDeviationDeg : 0.0});
+                                       .tangent_planes = !o.sharpen});
         r.decimated = true;
-        r.compacted = compact;
         append(r.warnings, r.decimate.warnings);
         r.seconds.decimate = clock.lap();
     }
@@ -425,7 +457,8 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
         // A few pairs of faces decimated through each other (deep folds, thin parts): CGAL's local
         // repair first (cleanup_mesh's self-intersection step alone), kept only if it clears them all
         // and keeps the mesh as closed and manifold as it was.
-        if (decimator == Decimator::Auto && rep.self_intersections > 0 && broken_guarantee(input, after, -1).empty()) {
+        if ((decimator == Decimator::Auto || options.local_repair) && rep.self_intersections > 0 &&
+            broken_guarantee(input, after, -1).empty()) {
             Mesh repaired = result;
             cgal::CleanupOptions co;
             co.remove_degenerate = false;
@@ -618,16 +651,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
             r.seconds.total += seconds;
         }
         if (compact_after_trim) {
-            Stopwatch clock;
-            detail::begin(progress, "decimate");
-            // the trimmed surface keeps the field's normals (set_volume_normals), the decimation's tangent planes
-            r.decimate = decimate_mesh(result.mesh, {.max_error = kCompactErrorVoxels * v.grid.voxel_size,
-                                                     .tangent_planes = !o.sharpen,
-                                                     .max_normal_deviation_deg = kCompactNormalDeviationDeg});
-            r.decimated = r.compacted = true;
-            append(r.warnings, r.decimate.warnings);
+            compact_surface(result.mesh, v, o, r, progress);
             set_volume_normals(result.mesh, v);
-            r.seconds.decimate = clock.lap();
             r.seconds.total += r.seconds.decimate;
         }
         if (m.has_colors()) transfer_colors(result.mesh, m, q ? *q : *(q = make_bvh_query(m)));
@@ -649,7 +674,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.warnings.push_back(std::to_string(r.fit.outside_band) + " of the " + std::to_string(r.fit.vertices) +
                              " vertices were left unsmoothed: the smoothed surface is farther from them than its band "
                              "(at open borders, spikes, strays or parts thinner than a voxel)");
-    check_output(result.mesh, r, false, false, self_intersection_pairs(m, true));
+    r.input_self_intersections = self_intersection_pairs(m, true);
+    check_output(result.mesh, r, false, false, r.input_self_intersections);
     const double seconds = fit_clock.lap();
     r.seconds.extract += seconds;
     r.seconds.total += seconds;

@@ -230,6 +230,8 @@ struct PipelineReport {
     bool checked = false;
     MeshReport output;
     long long output_self_intersections = -1;
+    /// Kept: the pairs the input had, counted the same way (welded: a kept input may be a soup); -1 otherwise.
+    long long input_self_intersections = -1;
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order
@@ -329,6 +331,9 @@ struct DecimationOptions {
     const MeshReport* input_report = nullptr;
     /// false: DecimationReport's distances are left at 0, for a caller that measures its own final result.
     bool measure_distance = true;
+    /// Decimator::Quadric: also try CGAL's local self-intersection repair on its result, as Auto does (builds with
+    /// CGAL), without Auto's fallback to CGAL's edge collapse of the whole mesh.
+    bool local_repair = false;
 };
 
 /// Decimates m in place with options.decimator to at most options.target_faces faces and/or within

@@ -207,13 +207,16 @@ Json to_json(const PipelineReport& r) {
                                 .set("removed", r.components.removed)
                                 .set("faces_removed", r.components.faces));
     if (r.decimated) j.set("decimate", to_json(r.decimate).set("default", r.compacted));
-    if (r.checked)
-        j.set("checked", Json::object()
-                             .set("closed", r.output.closed)
-                             .set("manifold", r.output.manifold)
-                             .set("degenerate_faces", r.output.degenerate_faces)
-                             .set("components", r.output.components)
-                             .set("self_intersecting_pairs", r.output_self_intersections));
+    if (r.checked) {
+        Json c = Json::object();
+        c.set("closed", r.output.closed)
+            .set("manifold", r.output.manifold)
+            .set("degenerate_faces", r.output.degenerate_faces)
+            .set("components", r.output.components)
+            .set("self_intersecting_pairs", r.output_self_intersections);
+        if (r.connectivity_kept) c.set("input_self_intersecting_pairs", r.input_self_intersections);
+        j.set("checked", c);
+    }
     Json s = Json::object();
     s.set("repair", r.seconds.repair)
         .set("voxelize", r.seconds.voxelize)
