@@ -59,7 +59,7 @@ int run_tetmesh(const TetmeshArgs& a) {
                 stderr,
                 "tetmesh: %s: the smallest dihedral angle is %.2f deg; the tetrahedra at the surface are as "
                 "good as its triangles: --edge-length %.3g (its median edge length) remeshes it evenly first\n",
-                a.input.c_str(), r.min_dihedral_deg, model_length_scale(m));
+                a.input.c_str(), r.min_dihedral_deg, median_edge_length(m));
     }
     if (a.out.json) {
         Json j = Json::object();

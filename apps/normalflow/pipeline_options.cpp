@@ -84,7 +84,8 @@ void add_smooth_options(CLI::App* cmd, PipelineOptions& p) {
         ->check(CLI::Range(1, 10000));
     cmd->add_option(
            "--length-scale", p.length_scale,
-           "bilateral, guided, tv: the model's length unit in world units (default: the input's median edge length)")
+           "bilateral, guided, tv: the model's length unit in world units (default: the input's median edge length, "
+           "at most 1/25.6 of its longest side)")
         ->check(CLI::PositiveNumber);
     cmd->add_option("--sigma-spatial", s.sigma_spatial, "bilateral, guided: spatial sigma in length units")
         ->check(CLI::PositiveNumber)

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <numeric>
 #include <string>
+#include <tuple>
 #include <type_traits>
 
 #include "core/errors.h"
@@ -217,10 +219,25 @@ namespace {
 /// which finds the intersections.
 /// weld: the vertex indices are not the connectivity (a kept input, which may be a soup): faces meeting at
 /// coincident vertices share them.
+/// Vertices that had one position in `before` (the corners of a soup, which the fit moved together) go back
+/// together, so that no crack opens between them; each such group counts once.
 long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before, bool weld = false) {
 #ifdef NORMALFLOW_HAS_CGAL
     long long restored = 0;
     std::vector<char> done(m.positions.size(), 0), changed(m.positions.size(), 0), marked(m.triangles.size());
+    // the groups of coincident vertices in `before`: group_of[i] indexes `order`'s run [start[g], start[g + 1])
+    std::vector<std::uint32_t> order(m.positions.size()), group_of(m.positions.size()), start;
+    std::iota(order.begin(), order.end(), 0u);
+    const auto less = [&](std::uint32_t a, std::uint32_t b) {
+        const Vec3f &p = before[a], &q = before[b];
+        return std::tie(p.x, p.y, p.z, a) < std::tie(q.x, q.y, q.z, b);
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+        if (k == 0 || before[order[k]] != before[order[k - 1]]) start.push_back(std::uint32_t(k));
+        group_of[order[k]] = std::uint32_t(start.size() - 1);
+    }
+    start.push_back(std::uint32_t(order.size()));
     // first every face with a moved vertex (the extraction has no intersecting faces), then only the faces whose
     // vertices the last round gave back: any other pair was checked with the positions it still has
     for (std::size_t i = 0; i < m.positions.size(); ++i) changed[i] = m.positions[i] != before[i];
@@ -239,13 +256,18 @@ long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before, 
         std::fill(changed.begin(), changed.end(), 0);
         for (const auto& [a, b] : pairs)
             for (const std::uint32_t f : {a, b})
-                for (const std::uint32_t vtx : m.triangles[f])
-                    if (m.positions[vtx] != before[vtx]) {
-                        m.positions[vtx] = before[vtx];
-                        changed[vtx] = 1;
-                        restored += !done[vtx];
-                        done[vtx] = 1;
+                for (const std::uint32_t vtx : m.triangles[f]) {
+                    if (m.positions[vtx] == before[vtx]) continue;
+                    const std::uint32_t g = group_of[vtx];
+                    restored += !done[order[start[g]]];
+                    done[order[start[g]]] = 1;
+                    for (std::uint32_t k = start[g]; k < start[g + 1]; ++k) {
+                        const std::uint32_t u = order[k];
+                        if (m.positions[u] == before[u]) continue;
+                        m.positions[u] = before[u];
+                        changed[u] = 1;
                     }
+                }
     }
     return restored;
 #else
@@ -554,7 +576,7 @@ const char* to_string(Connectivity c) {
     }
 }
 
-double model_length_scale(const Mesh& m) {
+double median_edge_length(const Mesh& m) {
     std::vector<double> len;
     len.reserve(m.triangles.size() * 3);
     for (const auto& t : m.triangles)
@@ -566,6 +588,16 @@ double model_length_scale(const Mesh& m) {
     auto mid = len.begin() + std::ptrdiff_t(len.size() / 2);
     std::nth_element(len.begin(), mid, len.end());
     return *mid;
+}
+
+double model_length_scale(const Mesh& m) {
+    const double edge = median_edge_length(m);
+    if (m.triangles.empty()) return edge;
+    const Box3d box = bounding_box(m);
+    const Vec3d size = box.max - box.min;
+    const double longest = std::max({size.x, size.y, size.z});
+    const double coarsest_unit = longest * kAutoVoxelsPerLength / kAutoResolutionMin;
+    return coarsest_unit > 0 ? std::min(edge, coarsest_unit) : edge;
 }
 
 namespace {

@@ -145,7 +145,7 @@ struct PipelineOptions {
     /// the paper", has the study that chose it.
     SmoothOptions smooth{.mode = SmoothMode::Bilateral};
     /// World units, >= 0: the model's length unit for the engine (SmoothOptions::length_scale);
-    /// 0: the median edge length of the input (model_length_scale).
+    /// 0: the input's median edge length, at most 1/25.6 of its longest side (model_length_scale).
     double length_scale = 0;
     /// What comes back: the input's own mesh fitted to the result, or a new one extracted from it.
     /// Auto keeps an open input's, and a closed input's whose fitted faces agree with the result
@@ -359,9 +359,20 @@ DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator deci
 SampledDistance decimation_distance(const Mesh& result, const Mesh& input);
 
 /// The median length of the mesh's edges (each triangle's three, so an inner edge counts twice),
-/// world units; 0 for a mesh without triangles. What smooth_mesh takes as the model's length unit
-/// when PipelineOptions::length_scale is 0: the noise of a scan or of a noisy mesh is about an
-/// edge long, and features narrower than an edge are not in the mesh.
+/// world units; 0 for a mesh without triangles.
+double median_edge_length(const Mesh& m);
+
+/// What smooth_mesh takes as the model's length unit when PipelineOptions::length_scale is 0: the
+/// median edge length (the noise of a scan or of a noisy mesh is about an edge long, and features
+/// narrower than an edge are not in the mesh), but at most kAutoVoxelsPerLength voxels of the
+/// coarsest automatic grid, the longest side of the bounding box / (kAutoResolutionMin /
+/// kAutoVoxelsPerLength) = 1/25.6 of it. The automatic resolution puts kAutoVoxelsPerLength voxels
+/// on the unit; an input so coarse that even kAutoResolutionMin puts more on its median edge (fewer
+/// than 26 edges along its longest side: a low-poly or CAD export, a part of a few hundred
+/// triangles) has facets that are its shape rather than the scale of its noise, and smoothing at
+/// the facets' scale would round that shape and cost time ∝ (edge in voxels)²: such an input is
+/// smoothed at the unit of the coarsest grid instead. Every input that reaches the automatic
+/// resolution's lower bound by its edges alone is concerned; no other one is.
 double model_length_scale(const Mesh& m);
 
 /// The resolution smooth_mesh uses for scan.resolution = 0: kAutoVoxelsPerLength × the longest

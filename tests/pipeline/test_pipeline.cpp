@@ -158,15 +158,36 @@ TEST(Pipeline, ScanBandIsAtLeastThreeVoxelsWhenSmoothing) {
     EXPECT_EQ(mesh_to_volume(test::icosphere(1.0, 2), o).half_width, 1.5f);
 }
 
-TEST(Pipeline, ModelLengthScaleIsTheMedianEdgeLength) {
+TEST(Pipeline, MedianEdgeLength) {
     Mesh square;  // two triangles of a 2 × 2 square: edges 2, 2, 2√2 each
     square.positions = {Vec3f(0, 0, 0), Vec3f(2, 0, 0), Vec3f(2, 2, 0), Vec3f(0, 2, 0)};
     square.triangles = {{0, 1, 2}, {0, 2, 3}};
-    EXPECT_DOUBLE_EQ(model_length_scale(square), 2.0);
+    EXPECT_DOUBLE_EQ(median_edge_length(square), 2.0);
     square.triangles.push_back({1, 3, 2});  // a third triangle: one more 2√2 edge and two of 2
-    EXPECT_DOUBLE_EQ(model_length_scale(square), 2.0);
+    EXPECT_DOUBLE_EQ(median_edge_length(square), 2.0);
     for (auto& p : square.positions) p = p * 0.5f;  // it scales with the model
-    EXPECT_DOUBLE_EQ(model_length_scale(square), 1.0);
+    EXPECT_DOUBLE_EQ(median_edge_length(square), 1.0);
+    EXPECT_EQ(median_edge_length(Mesh{}), 0.0);
+}
+
+TEST(Pipeline, ModelLengthScaleIsTheMedianEdgeUnlessCoarserThanTheCoarsestGrid) {
+    // A fine mesh: the unit is its median edge (under 1/25.6 of its longest side, 2).
+    const Mesh fine = test::icosphere(1.0, 5);
+    const double coarsest_unit = 2.0 * kAutoVoxelsPerLength / kAutoResolutionMin;
+    ASSERT_LT(median_edge_length(fine), coarsest_unit);
+    EXPECT_DOUBLE_EQ(model_length_scale(fine), median_edge_length(fine));
+    // A coarse one (an icosahedron, a box of two triangles a side): kAutoVoxelsPerLength voxels of the coarsest
+    // automatic grid, so that the automatic resolution stays at its lower bound and the unit is as many voxels
+    // there as at any other input's automatic resolution.
+    for (const Mesh& coarse : {test::icosphere(1.0, 0), test::box_mesh({-1, -1, -1}, {1, 1, 1})}) {
+        const Vec3d size = bounding_box(coarse).max - bounding_box(coarse).min;
+        const double longest = std::max({size.x, size.y, size.z});
+        ASSERT_GT(median_edge_length(coarse), longest / 10);
+        EXPECT_NEAR(model_length_scale(coarse), longest * kAutoVoxelsPerLength / kAutoResolutionMin, 1e-12);
+        PipelineOptions o = quick_options();
+        o.scan.resolution = 0;
+        EXPECT_EQ(auto_resolution(coarse, o), kAutoResolutionMin);
+    }
     EXPECT_EQ(model_length_scale(Mesh{}), 0.0);
 }
 
