@@ -213,70 +213,107 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
 
 namespace {
 
-/// Gives the vertices of every face that intersects another face, touches one at a distinct vertex of the same
-/// position (two vertices moved onto one corner) or lost its area their position in `before`, until no face
-/// does (an extraction is free of all three, so this ends). The number of vertices given back; -1 without CGAL,
-/// which finds the intersections.
-/// weld: the vertex indices are not the connectivity (a kept input, which may be a soup): faces meeting at
-/// coincident vertices share them.
-/// Vertices that had one position in `before` (the corners of a soup, which the fit moved together) go back
-/// together, so that no crack opens between them; each such group counts once.
-long long restore_self_intersections(Mesh& m, const std::vector<Vec3f>& before, bool weld = false) {
+/// Gives vertices back their position in `before`, the vertices that had one position there (the corners of a soup,
+/// which a fit moves together) together, so that no crack opens between them; each such group counts once.
+class VertexRestorer {
+public:
+    VertexRestorer(Mesh& m, const std::vector<Vec3f>& before)
+        : m_(m),
+          before_(before),
+          order_(m.positions.size()),
+          group_of_(m.positions.size()),
+          done_(m.positions.size(), 0),
+          changed_(m.positions.size(), 0) {
+        // the groups of coincident vertices in `before`: group g is order_'s run [start_[g], start_[g + 1])
+        std::iota(order_.begin(), order_.end(), 0u);
+        std::sort(order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
+            const Vec3f &p = before[a], &q = before[b];
+            return std::tie(p.x, p.y, p.z, a) < std::tie(q.x, q.y, q.z, b);
+        });
+        for (std::size_t k = 0; k < order_.size(); ++k) {
+            if (k == 0 || before[order_[k]] != before[order_[k - 1]]) start_.push_back(std::uint32_t(k));
+            group_of_[order_[k]] = std::uint32_t(start_.size() - 1);
+        }
+        start_.push_back(std::uint32_t(order_.size()));
+        for (std::size_t i = 0; i < m.positions.size(); ++i) changed_[i] = m.positions[i] != before[i];
+    }
+
+    /// Gives back the vertices of every face that intersects another face, touches one at a distinct vertex of the
+    /// same position (two vertices moved onto one corner) or lost its area, until no face does (`before` is free of
+    /// all three, or they are left where `before` had them). First the faces with a vertex moved since the last
+    /// call (every moved one the first time), then only those whose vertices the last round gave back: any other
+    /// pair was checked with the positions it still has. weld: the vertex indices are not the connectivity (a kept
+    /// input, which may be a soup): faces meeting at coincident vertices share them. The groups given back; -1
+    /// without CGAL, which finds the intersections.
+    long long intersections(bool weld) {
 #ifdef NORMALFLOW_HAS_CGAL
-    long long restored = 0;
-    std::vector<char> done(m.positions.size(), 0), changed(m.positions.size(), 0), marked(m.triangles.size());
-    // the groups of coincident vertices in `before`: group_of[i] indexes `order`'s run [start[g], start[g + 1])
-    std::vector<std::uint32_t> order(m.positions.size()), group_of(m.positions.size()), start;
-    std::iota(order.begin(), order.end(), 0u);
-    const auto less = [&](std::uint32_t a, std::uint32_t b) {
-        const Vec3f &p = before[a], &q = before[b];
-        return std::tie(p.x, p.y, p.z, a) < std::tie(q.x, q.y, q.z, b);
-    };
-    std::sort(order.begin(), order.end(), less);
-    for (std::size_t k = 0; k < order.size(); ++k) {
-        if (k == 0 || before[order[k]] != before[order[k - 1]]) start.push_back(std::uint32_t(k));
-        group_of[order[k]] = std::uint32_t(start.size() - 1);
-    }
-    start.push_back(std::uint32_t(order.size()));
-    // first every face with a moved vertex (the extraction has no intersecting faces), then only the faces whose
-    // vertices the last round gave back: any other pair was checked with the positions it still has
-    for (std::size_t i = 0; i < m.positions.size(); ++i) changed[i] = m.positions[i] != before[i];
-    for (int round = 0; round < 64; ++round) {
-        for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-            const Tri& t = m.triangles[f];
-            marked[f] = changed[t[0]] || changed[t[1]] || changed[t[2]];
+        const long long before = restored_;
+        std::vector<char> marked(m_.triangles.size());
+        for (int round = 0; round < 64; ++round) {
+            for (std::size_t f = 0; f < m_.triangles.size(); ++f) {
+                const Tri& t = m_.triangles[f];
+                marked[f] = changed_[t[0]] || changed_[t[1]] || changed_[t[2]];
+            }
+            std::fill(changed_.begin(), changed_.end(), 0);
+            auto pairs = self_intersecting_pairs(m_, &marked, weld);
+            for (std::size_t f = 0; f < m_.triangles.size(); ++f) {
+                const Tri& t = m_.triangles[f];
+                if (marked[f] && exactly_collinear(m_.positions[t[0]], m_.positions[t[1]], m_.positions[t[2]]))
+                    pairs.emplace_back(std::uint32_t(f), std::uint32_t(f));
+            }
+            if (pairs.empty()) break;
+            for (const auto& [a, b] : pairs)
+                for (const std::uint32_t f : {a, b}) give_back(m_.triangles[f]);
         }
-        auto pairs = self_intersecting_pairs(m, &marked, weld);
-        for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-            const Tri& t = m.triangles[f];
-            if (marked[f] && exactly_collinear(m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]))
-                pairs.emplace_back(std::uint32_t(f), std::uint32_t(f));
-        }
-        if (pairs.empty()) break;
-        std::fill(changed.begin(), changed.end(), 0);
-        for (const auto& [a, b] : pairs)
-            for (const std::uint32_t f : {a, b})
-                for (const std::uint32_t vtx : m.triangles[f]) {
-                    if (m.positions[vtx] == before[vtx]) continue;
-                    const std::uint32_t g = group_of[vtx];
-                    restored += !done[order[start[g]]];
-                    done[order[start[g]]] = 1;
-                    for (std::uint32_t k = start[g]; k < start[g + 1]; ++k) {
-                        const std::uint32_t u = order[k];
-                        if (m.positions[u] == before[u]) continue;
-                        m.positions[u] = before[u];
-                        changed[u] = 1;
-                    }
-                }
-    }
-    return restored;
+        return restored_ - before;
 #else
-    (void)m;
-    (void)before;
-    (void)weld;
-    return -1;
+        (void)weld;
+        return -1;
 #endif
-}
+    }
+
+    /// Gives back the vertices of every face that points against the volume (faces_against_volume) where the
+    /// input's face (against[f], measured on `before`) did not, until none does. The groups given back.
+    long long flips(const Volume& v, const std::vector<char>& input_against) {
+        const long long before = restored_;
+        for (int round = 0; round < 64; ++round) {
+            const std::vector<char> against = faces_against_volume(m_, v);
+            bool any = false;
+            for (std::size_t f = 0; f < against.size(); ++f)
+                if (against[f] && !input_against[f]) any |= give_back(m_.triangles[f]);
+            if (!any) break;
+        }
+        return restored_ - before;
+    }
+
+    long long restored() const { return restored_; }
+
+private:
+    /// Gives t's vertices (and their groups) back; whether any moved.
+    bool give_back(const Tri& t) {
+        bool any = false;
+        for (const std::uint32_t vtx : t) {
+            if (m_.positions[vtx] == before_[vtx]) continue;
+            const std::uint32_t g = group_of_[vtx];
+            restored_ += !done_[order_[start_[g]]];
+            done_[order_[start_[g]]] = 1;
+            for (std::uint32_t k = start_[g]; k < start_[g + 1]; ++k) {
+                const std::uint32_t u = order_[k];
+                if (m_.positions[u] == before_[u]) continue;
+                m_.positions[u] = before_[u];
+                changed_[u] = 1;
+                any = true;
+            }
+        }
+        return any;
+    }
+
+    Mesh& m_;
+    const std::vector<Vec3f>& before_;
+    std::vector<std::uint32_t> order_, group_of_, start_;
+    std::vector<char> done_, changed_;
+    long long restored_ = 0;
+};
 
 }  // namespace
 
@@ -357,7 +394,7 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
         so.max_move = kSharpenMaxMoveVoxels * v.grid.voxel_size;
         so.threads = o.scan.threads;
         r.sharpen = sharpen_mesh(m, mesh_probe(*reference, *q), so, progress);
-        r.sharpen_restored = restore_self_intersections(m, extracted);
+        r.sharpen_restored = VertexRestorer(m, extracted).intersections(/*weld=*/false);
         if (r.sharpen_restored < 0)
             r.warnings.push_back("sharpened without the self-intersection check (a build without CGAL)");
         r.sharpened = true;
@@ -622,6 +659,9 @@ void check_output(const Mesh& m, PipelineReport& r, bool remeshed, bool closed, 
     if (r.output_self_intersections > std::max(0LL, input_pairs))
         add(std::to_string(r.output_self_intersections) + " pairs of intersecting faces" +
             (input_pairs > 0 ? " (the input had " + std::to_string(input_pairs) + ")" : ""));
+    if (!remeshed && r.flipped_faces > std::max(0LL, r.input_flipped_faces))
+        add(std::to_string(r.flipped_faces) + " faces turned over against the surface (the input had " +
+            std::to_string(r.input_flipped_faces) + ")");
     if (!what.empty()) r.warnings.push_back("the result has " + what);
 }
 
@@ -699,7 +739,19 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
     // pushed through each other. The vertices of faces that now intersect (or lost their area) go back to where the
     // input had them, until none does: the kept mesh has no intersection the input did not have.
-    r.fit_restored = restore_self_intersections(result.mesh, m.positions, /*weld=*/true);
+    // Nor may a face turn over against the smoothed surface where the input's face did not: its vertices go back
+    // too. Giving vertices back for one reason can break the other, so the two alternate until both hold.
+    {
+        const std::vector<char> input_against = faces_against_volume(m, v);
+        r.input_flipped_faces = std::count(input_against.begin(), input_against.end(), char(1));
+        VertexRestorer back(result.mesh, m.positions);
+        back.flips(v, input_against);
+        for (int round = 0; round < 8 && back.intersections(/*weld=*/true) > 0; ++round)
+            if (back.flips(v, input_against) == 0) break;
+        r.fit_restored = back.restored();
+        const std::vector<char> against = faces_against_volume(result.mesh, v);
+        r.flipped_faces = std::count(against.begin(), against.end(), char(1));
+    }
     set_volume_normals(result.mesh, v);  // replaces the input's normals, which belong to the noisy surface
     r.connectivity_kept = true;
     if (r.fit.outside_band > 0)

@@ -211,8 +211,8 @@ struct PipelineReport {
     bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
     bool fitted = false;             ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
     FitReport fit;                   ///< valid when fitted
-    /// Kept: vertices given back their input position because the fit made their faces intersect others (or lose
-    /// their area); -1: not checked (a build without CGAL).
+    /// Kept: vertices given back their input position because the fit made their faces intersect others, lose
+    /// their area or turn over against the smoothed surface (faces_against_volume) where the input's did not.
     long long fit_restored = 0;
     bool trimmed = false;    ///< an open input's re-meshed result was trimmed to its footprint
     TrimReport trim;         ///< valid when trimmed
@@ -232,6 +232,9 @@ struct PipelineReport {
     long long output_self_intersections = -1;
     /// Kept: the pairs the input had, counted the same way (welded: a kept input may be a soup); -1 otherwise.
     long long input_self_intersections = -1;
+    /// Kept: the faces of the result, and of the input, that point against the smoothed surface
+    /// (faces_against_volume); -1 otherwise.
+    long long flipped_faces = -1, input_flipped_faces = -1;
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order

@@ -214,7 +214,10 @@ Json to_json(const PipelineReport& r) {
             .set("degenerate_faces", r.output.degenerate_faces)
             .set("components", r.output.components)
             .set("self_intersecting_pairs", r.output_self_intersections);
-        if (r.connectivity_kept) c.set("input_self_intersecting_pairs", r.input_self_intersections);
+        if (r.connectivity_kept)
+            c.set("input_self_intersecting_pairs", r.input_self_intersections)
+                .set("flipped_faces", r.flipped_faces)
+                .set("input_flipped_faces", r.input_flipped_faces);
         j.set("checked", c);
     }
     Json s = Json::object();

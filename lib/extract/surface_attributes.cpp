@@ -32,6 +32,25 @@ void set_volume_normals(Mesh& m, const Volume& v) {
                       });
 }
 
+std::vector<char> faces_against_volume(const Mesh& m, const Volume& v) {
+    check_mesh(m, "faces_against_volume");
+    v.check("faces_against_volume");
+    const detail::VolumeSampler S(v);
+    std::vector<char> against(m.triangles.size(), 0);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, m.triangles.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t f = r.begin(); f != r.end(); ++f) {
+                const Tri& t = m.triangles[f];
+                const Vec3d c = (Vec3d(m.positions[t[0]]) + Vec3d(m.positions[t[1]]) + Vec3d(m.positions[t[2]])) / 3.0;
+                if (S.outside_band(c)) continue;
+                Vec3d g;
+                S.phi(c, &g);
+                against[f] = dot(face_area_vector(m, t), g) < 0;
+            }
+        });
+    return against;
+}
+
 void set_face_normals(Mesh& m) {
     check_mesh(m, "set_face_normals");
     std::vector<std::uint32_t> group;

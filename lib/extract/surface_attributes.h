@@ -3,6 +3,8 @@
 /// Per-vertex attributes of a processed surface (see Mesh): vertex normals from the volume or from the
 /// faces, and colours carried over from the input to a re-meshed surface.
 
+#include <vector>
+
 #include "core/mesh.h"
 #include "core/volume.h"
 #include "sdf/closest_triangle.h"
@@ -24,6 +26,14 @@ void set_volume_normals(Mesh& m, const Volume& v);
 /// \throw InvalidInput if m is invalid.
 /// Cost: O(V log V + F), single-threaded.
 void set_face_normals(Mesh& m);
+
+/// Which faces of m point against the volume: 1 where the face's normal (its area vector) and ∇φ at its centroid
+/// make more than 90°, the face turned over against the surface the volume holds; 0 elsewhere, and for faces
+/// without area or whose centroid is outside the band. How a kept mesh's fit is checked for faces it flipped
+/// (count them on the input and on the result, against the same volume).
+/// \throw InvalidInput if m or v is invalid.
+/// Cost: one trilinear gradient per face, TBB parallel; independent of the thread count.
+std::vector<char> faces_against_volume(const Mesh& m, const Volume& v);
 
 /// Sets m.colors to the colours of `source` at the points of `source` closest to m's vertices (the
 /// barycentric blend of the closest triangle's vertex colours, rounded): how a re-meshed surface gets

@@ -143,6 +143,8 @@ def promises(nf, data, checker):
                 else:
                     if c.get("self_intersecting_pairs", 0) > c.get("input_self_intersecting_pairs", 0):
                         fail(f"{name}: the kept mesh has more intersecting pairs than the input: {c}")
+                    if c.get("flipped_faces", 0) > c.get("input_flipped_faces", 0):
+                        fail(f"{name}: the kept mesh has more faces turned against the surface than the input: {c}")
                     # the kept mesh, welded as the input is for its report: no crack opened between the corners
                     # of a soup (more borders, more parts), no manifold input made non-manifold
                     i = json.loads(run([nf, "info", f, "--json"])[0].stdout.strip().splitlines()[-1])
