@@ -294,10 +294,13 @@ int main(int argc, char** argv) {
                     for (const auto& [e, deg] : sweep) {
                         Mesh d = res.mesh;
                         const double t1 = now_ms();
+                        // as the compact default runs it (compact_surface in io/pipeline/pipeline.cpp)
                         const DecimationReport dr = decimate_mesh(d, {.max_error = e * res.report.scan.grid.voxel_size,
-                                                                      .tangent_planes = true,
+                                                                      .decimator = Decimator::Quadric,
+                                                                      .tangent_planes = !o.sharpen,
                                                                       .max_normal_deviation_deg = deg,
-                                                                      .measure_distance = false});
+                                                                      .measure_distance = false,
+                                                                      .local_repair = true});
                         char p[160];
                         std::snprintf(p, sizeof p, "%s, max error %g voxel, %g°, %zu faces%s", res_params.c_str(), e,
                                       deg, d.triangles.size(), dr.fallback.empty() ? "" : " (cgal)");

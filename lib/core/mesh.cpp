@@ -79,30 +79,37 @@ void compute_vertex_normals(Mesh& m) {
     }
 }
 
+std::vector<std::uint32_t> face_components(const Mesh& m, const std::vector<char>* only, std::size_t* count) {
+    const auto in = [&](std::size_t f) { return !only || (*only)[f] != 0; };
+    detail::UnionFind<std::uint32_t> uf(m.positions.size());
+    for (std::size_t f = 0; f < m.triangles.size(); ++f)
+        if (in(f)) {
+            uf.unite(m.triangles[f][0], m.triangles[f][1]);
+            uf.unite(m.triangles[f][0], m.triangles[f][2]);
+        }
+    std::vector<std::uint32_t> id(m.positions.size(), kNoComponent), component(m.triangles.size(), kNoComponent);
+    std::uint32_t n = 0;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+        if (!in(f)) continue;
+        std::uint32_t& c = id[uf.find(m.triangles[f][0])];
+        if (c == kNoComponent) c = n++;
+        component[f] = c;
+    }
+    if (count) *count = n;
+    return component;
+}
+
 ComponentsRemoved remove_extra_components(Mesh& m, std::size_t allowed, double max_area_fraction) {
     ComponentsRemoved r;
     r.allowed = allowed;
-    detail::UnionFind<std::uint32_t> uf(m.positions.size());
-    for (const Tri& t : m.triangles) {
-        uf.unite(t[0], t[1]);
-        uf.unite(t[0], t[2]);
-    }
-    std::vector<std::uint32_t> id(m.positions.size(), std::numeric_limits<std::uint32_t>::max());
-    std::vector<double> area;
-    std::vector<std::uint32_t> face_component(m.triangles.size());
+    const std::vector<std::uint32_t> face_component = face_components(m, nullptr, &r.components);
+    std::vector<double> area(r.components, 0.0);
     double total = 0;
     for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-        std::uint32_t& c = id[uf.find(m.triangles[f][0])];
-        if (c == std::numeric_limits<std::uint32_t>::max()) {
-            c = std::uint32_t(area.size());
-            area.push_back(0);
-        }
-        face_component[f] = c;
         const double a = 0.5 * norm(face_area_vector(m, m.triangles[f]));
-        area[c] += a;
+        area[face_component[f]] += a;
         total += a;
     }
-    r.components = area.size();
     if (area.size() <= allowed) return r;
     std::vector<std::uint32_t> order(area.size());
     for (std::uint32_t c = 0; c < order.size(); ++c) order[c] = c;

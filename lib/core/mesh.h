@@ -74,6 +74,14 @@ struct Box3d {
 /// Cost: one pass over the triangles and one over the positions; single-threaded.
 void check_mesh(const Mesh& m, std::string_view who);
 
+/// The connected component of each face (faces joined through shared vertex indices), numbered 0, 1, ... in the
+/// order of their first face; with `only`, just the faces f with (*only)[f] != 0 are joined and numbered, the
+/// others get kNoComponent. `count`, when given, receives the number of components.
+/// Cost: O(F α(V)) (union-find over the vertices).
+inline constexpr std::uint32_t kNoComponent = 0xffffffffu;
+std::vector<std::uint32_t> face_components(const Mesh& m, const std::vector<char>* only = nullptr,
+                                           std::size_t* count = nullptr);
+
 /// What remove_extra_components removed.
 struct ComponentsRemoved {
     std::size_t allowed = 0;           ///< the parts allowed (the input's)

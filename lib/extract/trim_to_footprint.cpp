@@ -45,27 +45,18 @@ bool contains(const std::vector<std::uint64_t>& sorted, std::uint64_t k) {
 
 /// The faces f with keep[f] == which, grouped by vertex connectivity (through faces of the same
 /// group), each with its size; in order of their first face.
-std::vector<std::pair<std::vector<std::size_t>, std::size_t>> face_components(const Mesh& m,
-                                                                              const std::vector<char>& keep,
-                                                                              char which) {
-    detail::UnionFind<std::uint32_t> uf(m.positions.size());
-    for (std::size_t f = 0; f < m.triangles.size(); ++f)
-        if (keep[f] == which) {
-            uf.unite(m.triangles[f][0], m.triangles[f][1]);
-            uf.unite(m.triangles[f][0], m.triangles[f][2]);
+std::vector<std::pair<std::vector<std::size_t>, std::size_t>> face_groups(const Mesh& m, const std::vector<char>& keep,
+                                                                          char which) {
+    std::vector<char> in(keep.size());
+    for (std::size_t f = 0; f < keep.size(); ++f) in[f] = keep[f] == which;
+    std::size_t n = 0;
+    const std::vector<std::uint32_t> component = face_components(m, &in, &n);
+    std::vector<std::pair<std::vector<std::size_t>, std::size_t>> out(n);
+    for (std::size_t f = 0; f < component.size(); ++f)
+        if (component[f] != kNoComponent) {
+            out[component[f]].first.push_back(f);
+            ++out[component[f]].second;
         }
-    std::vector<std::uint32_t> slot(m.positions.size(), UINT32_MAX);
-    std::vector<std::pair<std::vector<std::size_t>, std::size_t>> out;
-    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-        if (keep[f] != which) continue;
-        std::uint32_t& s = slot[uf.find(m.triangles[f][0])];
-        if (s == UINT32_MAX) {
-            s = std::uint32_t(out.size());
-            out.emplace_back();
-        }
-        out[s].first.push_back(f);
-        ++out[s].second;
-    }
     return out;
 }
 
@@ -139,7 +130,7 @@ TrimReport trim_to_footprint(Mesh& m, const Mesh& input, const ClosestTriangleQu
     // Each removed patch opens the input loops its vertices project onto. Where one loop has several
     // patches, the largest is its opening and the others are holes the surface near the rim punched
     // (a stretch a little off the input): they come back. A patch of far vertices only is cap.
-    const auto patches = face_components(m, keep, 0);
+    const auto patches = face_groups(m, keep, 0);
     std::vector<std::vector<std::uint32_t>> patch_loops(patches.size());
     std::vector<std::pair<std::uint32_t, std::size_t>> largest;  // per loop root: (root, patch), sorted by root
     for (std::size_t p = 0; p < patches.size(); ++p) {
@@ -188,7 +179,7 @@ TrimReport trim_to_footprint(Mesh& m, const Mesh& input, const ClosestTriangleQu
     // Small pieces the cut separated from the rest.
     std::size_t kept = 0;
     for (const char k : keep) kept += k != 0;
-    for (const auto& [component, size] : face_components(m, keep, 1))
+    for (const auto& [component, size] : face_groups(m, keep, 1))
         if (size < kept / 100) {
             ++rep.components_removed;
             for (const std::size_t f : component) keep[f] = 0;

@@ -94,6 +94,24 @@ void add_tetrahedron(Mesh& m, double s, Vec3d c) {
         m.triangles.push_back({b + t[0], b + t[1], b + t[2]});
 }
 
+// Components numbered in the order of their first face; with `only`, a part split where faces are left out.
+TEST(FaceComponents, NumberedByFirstFaceAndOnlyTheChosenFacesJoin) {
+    Mesh m;
+    add_tetrahedron(m, 1.0, {0, 0, 0});
+    add_tetrahedron(m, 1.0, {5, 0, 0});
+    std::swap(m.triangles[0], m.triangles[5]);  // the second tetrahedron's face comes first
+    std::size_t n = 0;
+    const std::vector<std::uint32_t> c = face_components(m, nullptr, &n);
+    EXPECT_EQ(n, 2u);
+    EXPECT_EQ(c, (std::vector<std::uint32_t>{0, 1, 1, 1, 0, 1, 0, 0}));
+    // faces 1 and 5 of the first tetrahedron (they share its edge 0-1) and face 4 of the second
+    const std::vector<char> only = {0, 1, 0, 0, 1, 1, 0, 0};
+    const std::vector<std::uint32_t> d = face_components(m, &only, &n);
+    EXPECT_EQ(n, 2u);
+    EXPECT_EQ(
+        d, (std::vector<std::uint32_t>{kNoComponent, 0, kNoComponent, kNoComponent, 1, 0, kNoComponent, kNoComponent}));
+}
+
 // Two parts allowed: the smallest of four goes when it is under the area fraction, the second smallest only when it
 // is too; a part as large as the fraction stays (the caller warns of it). Attributes follow the vertices.
 TEST(RemoveExtraComponents, SmallestBeyondTheAllowedGoWhileUnderTheFraction) {
