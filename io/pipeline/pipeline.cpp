@@ -243,9 +243,9 @@ public:
     /// all three, or they are left where `before` had them). First the faces with a vertex moved since the last
     /// call (every moved one the first time), then only those whose vertices the last round gave back: any other
     /// pair was checked with the positions it still has. weld: the vertex indices are not the connectivity (a kept
-    /// input, which may be a soup): faces meeting at coincident vertices share them. The groups given back; -1
-    /// without CGAL, which finds the intersections.
-    long long intersections(bool weld) {
+    /// input, which may be a soup): faces meeting at coincident vertices share them. halve: halfway back each time,
+    /// as flips does. The groups given back; -1 without CGAL, which finds the intersections.
+    long long intersections(bool weld, bool halve = false) {
 #ifdef NORMALFLOW_HAS_CGAL
         const long long before = restored_;
         std::vector<char> marked(m_.triangles.size());
@@ -262,25 +262,30 @@ public:
                     pairs.emplace_back(std::uint32_t(f), std::uint32_t(f));
             }
             if (pairs.empty()) break;
+            ++round_;
             for (const auto& [a, b] : pairs)
-                for (const std::uint32_t f : {a, b}) give_back(m_.triangles[f]);
+                for (const std::uint32_t f : {a, b}) give_back(m_.triangles[f], halve);
         }
         return restored_ - before;
 #else
         (void)weld;
+        (void)halve;
         return -1;
 #endif
     }
 
-    /// Gives back the vertices of every face that points against the volume (faces_against_volume) where the
-    /// input's face (against[f], measured on `before`) did not, until none does. The groups given back.
+    /// Moves back the vertices of every face that points against the volume (faces_against_volume) where the
+    /// input's face (against[f], measured on `before`) did not, until none does: each time halfway to `before`, and
+    /// all the way after kHalvings halvings, so that a vertex keeps as much of its move as leaves its faces the
+    /// right way round. The groups moved back.
     long long flips(const Volume& v, const std::vector<char>& input_against) {
         const long long before = restored_;
         for (int round = 0; round < 64; ++round) {
             const std::vector<char> against = faces_against_volume(m_, v);
+            ++round_;
             bool any = false;
             for (std::size_t f = 0; f < against.size(); ++f)
-                if (against[f] && !input_against[f]) any |= give_back(m_.triangles[f]);
+                if (against[f] && !input_against[f]) any |= give_back(m_.triangles[f], /*halve=*/true);
             if (!any) break;
         }
         return restored_ - before;
@@ -289,18 +294,25 @@ public:
     long long restored() const { return restored_; }
 
 private:
-    /// Gives t's vertices (and their groups) back; whether any moved.
-    bool give_back(const Tri& t) {
+    static constexpr int kHalvings = 4;
+
+    /// Gives t's vertices (and their groups) back, or with `halve` halfway back until they have been halved
+    /// kHalvings times; whether any moved.
+    bool give_back(const Tri& t, bool halve = false) {
         bool any = false;
         for (const std::uint32_t vtx : t) {
             if (m_.positions[vtx] == before_[vtx]) continue;
             const std::uint32_t g = group_of_[vtx];
-            restored_ += !done_[order_[start_[g]]];
-            done_[order_[start_[g]]] = 1;
+            const std::uint32_t lead = order_[start_[g]];
+            if (moved_in_[lead] == round_) continue;  // once a round, whatever the number of its faces
+            moved_in_[lead] = round_;
+            restored_ += !done_[lead];
+            done_[lead] = 1;
+            const bool all_the_way = !halve || ++halved_[lead] > kHalvings;
             for (std::uint32_t k = start_[g]; k < start_[g + 1]; ++k) {
                 const std::uint32_t u = order_[k];
                 if (m_.positions[u] == before_[u]) continue;
-                m_.positions[u] = before_[u];
+                m_.positions[u] = all_the_way ? before_[u] : before_[u] + (m_.positions[u] - before_[u]) * 0.5f;
                 changed_[u] = 1;
                 any = true;
             }
@@ -312,6 +324,9 @@ private:
     const std::vector<Vec3f>& before_;
     std::vector<std::uint32_t> order_, group_of_, start_;
     std::vector<char> done_, changed_;
+    std::vector<std::uint8_t> halved_ = std::vector<std::uint8_t>(m_.positions.size(), 0);
+    std::vector<int> moved_in_ = std::vector<int>(m_.positions.size(), 0);
+    int round_ = 0;
     long long restored_ = 0;
 };
 
@@ -746,7 +761,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.input_flipped_faces = std::count(input_against.begin(), input_against.end(), char(1));
         VertexRestorer back(result.mesh, m.positions);
         back.flips(v, input_against);
-        for (int round = 0; round < 8 && back.intersections(/*weld=*/true) > 0; ++round)
+        for (int round = 0; round < 8 && back.intersections(/*weld=*/true, /*halve=*/true) > 0; ++round)
             if (back.flips(v, input_against) == 0) break;
         r.fit_restored = back.restored();
         const std::vector<char> against = faces_against_volume(result.mesh, v);
