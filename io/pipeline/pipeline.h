@@ -213,8 +213,9 @@ struct PipelineReport {
     bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
     bool fitted = false;             ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
     FitReport fit;                   ///< valid when fitted
-    /// Kept: vertices given back their input position because the fit made their faces intersect others, lose
-    /// their area or turn over against the smoothed surface (faces_against_volume) where the input's did not.
+    /// Kept: vertices moved back toward their input position (halfway each time, all the way after four halvings)
+    /// because the fit made their faces intersect others, lose their area or turn over against the smoothed surface
+    /// (faces_against_volume) where the input's did not; -1: the intersections not checked (a build without CGAL).
     long long fit_restored = 0;
     bool trimmed = false;    ///< an open input's re-meshed result was trimmed to its footprint
     TrimReport trim;         ///< valid when trimmed
