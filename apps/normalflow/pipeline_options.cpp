@@ -12,6 +12,16 @@
 
 namespace normalflow::cli {
 
+namespace {
+
+std::string number(double x) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%g", x);
+    return b;
+}
+
+}  // namespace
+
 void add_grid_options(CLI::App* cmd, PipelineOptions& p) {
     auto* res = cmd->add_option("--resolution", p.scan.resolution,
                                 p.scan.resolution == 0
@@ -71,9 +81,11 @@ void add_smooth_options(CLI::App* cmd, PipelineOptions& p) {
     add_enum_option(cmd, "--mode", s.mode, modes,
                     "bilateral | guided | tv | anisotropic | isotropic | highboost | mcf");
     cmd->add_option("--iterations", s.iterations,
-                    "main iterations (normal loop + refit); default: " +
+                    "main iterations (normal loop + refit); default: up to " +
+                        std::to_string(default_iterations(SmoothMode::Bilateral)) +
+                        " for bilateral, guided and tv (fewer once the normal map is smooth), " +
                         std::to_string(default_iterations(SmoothMode::Anisotropic)) + " for anisotropic, " +
-                        std::to_string(default_iterations(SmoothMode::Isotropic)) + " for the other modes")
+                        std::to_string(default_iterations(SmoothMode::Isotropic)) + " for isotropic, highboost and mcf")
         ->check(CLI::Range(1, 10000));
     cmd->add_option("--normal-steps", s.normal_steps,
                     "normal-loop steps (bilateral, guided: filter passes; tv: solver iterations) per main iteration; "
@@ -136,10 +148,13 @@ void add_smooth_options(CLI::App* cmd, PipelineOptions& p) {
     cmd->add_flag("--second-order", s.second_order_term, "add Appendix A's second term (Eq. 39) to the refit");
     const std::map<std::string, Connectivity> connectivity = {
         {"auto", Connectivity::Auto}, {"keep", Connectivity::Keep}, {"remesh", Connectivity::Remesh}};
-    add_enum_option(cmd, "--connectivity", p.connectivity, connectivity,
-                    "keep: the input's own mesh, its vertices moved onto the result; remesh: a new mesh "
-                    "extracted from it (open where the input is open, see --closed); auto (default): keep for an "
-                    "open input, remesh for a closed one");
+    add_enum_option(
+        cmd, "--connectivity", p.connectivity, connectivity,
+        "keep: the input's own mesh, its vertices moved onto the result; remesh: a new mesh "
+        "extracted from it (open where the input is open, see --closed); auto (default): keep for an "
+        "open input, and for a closed one whose fitted faces agree with the result (within " +
+            number(kAutoKeepFitAngleDeg) +
+            " degrees on average), remesh otherwise and whenever --target-faces, --max-error or --closed is given");
     cmd->add_flag("--fit-to-normal-map", p.fit_to_normal_map,
                   "keep: turn the faces to the engine's last filtered normal map instead of the result's gradient");
     cmd->add_flag("--closed", p.closed,
