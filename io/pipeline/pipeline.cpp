@@ -71,24 +71,9 @@ void validate(const PipelineOptions& o) {
         bad_option("scan.shell_thickness", str(s.shell_thickness), ">= 0");
     if (s.threads < 0) bad_option("scan.threads", str(s.threads), ">= 0");
     if (o.smoothing) {
-        const SmoothOptions& m = o.smooth;
-        if (m.iterations < 0) bad_option("smooth.iterations", str(m.iterations), ">= 0");
-        if (m.normal_steps < 0) bad_option("smooth.normal_steps", str(m.normal_steps), ">= 0");
-        if (!(m.length_scale >= 0) || !std::isfinite(m.length_scale))
-            bad_option("smooth.length_scale", str(m.length_scale), ">= 0");
-        if (!(m.sigma_spatial > 0) || !std::isfinite(m.sigma_spatial))
-            bad_option("smooth.sigma_spatial", str(m.sigma_spatial), "> 0");
-        if (!(m.sigma_range > 0) || !std::isfinite(m.sigma_range))
-            bad_option("smooth.sigma_range", str(m.sigma_range), "> 0");
+        validate_smooth_options(o.smooth, "smooth_mesh", "smooth.");  // the engine's own checks, before any work
         if (!(o.length_scale >= 0) || !std::isfinite(o.length_scale))
             bad_option("length_scale", str(o.length_scale), ">= 0");
-        if (!(m.mu > 0) || !std::isfinite(m.mu)) bad_option("smooth.mu", str(m.mu), "> 0");
-        if (!(m.alpha >= 0) || !std::isfinite(m.alpha)) bad_option("smooth.alpha", str(m.alpha), ">= 0");
-        if (m.conductance_presmooth_steps < 0)
-            bad_option("smooth.conductance_presmooth_steps", str(m.conductance_presmooth_steps), ">= 0");
-        if (!(m.mu_robust >= 0) || !std::isfinite(m.mu_robust))
-            bad_option("smooth.mu_robust", str(m.mu_robust), ">= 0");
-        if (m.threads < 0) bad_option("smooth.threads", str(m.threads), ">= 0");
     }
     if (!std::isfinite(o.extract.iso)) bad_option("extract.iso", str(o.extract.iso), "a finite value");
     if (o.connectivity == Connectivity::Keep && o.target_faces > 0)

@@ -123,7 +123,14 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
 }
 
 void validate(const Volume& v, const SmoothOptions& opt) {
-    auto bad = [](const std::string& m) { throw InvalidInput("smooth_volume: " + m); };
+    validate_smooth_options(opt);
+    v.check("smooth_volume");  // the volume's own invariants (lib/core/volume.h)
+}
+
+}  // namespace
+
+void validate_smooth_options(const SmoothOptions& opt, const std::string& who, const std::string& prefix) {
+    auto bad = [&](const std::string& m) { throw InvalidInput(who + ": " + prefix + m); };
     if (opt.iterations < 0)
         bad("iterations must be >= 0 (0: the mode's default), got " + std::to_string(opt.iterations));
     if (opt.normal_steps < 0)
@@ -153,10 +160,7 @@ void validate(const Volume& v, const SmoothOptions& opt) {
     if (!(opt.active_band >= 1.5f && opt.active_band <= 5.0f))
         bad("active_band must be in [1.5, 5] voxels, got " + std::to_string(opt.active_band));
     if (opt.threads < 0) bad("threads must be >= 0, got " + std::to_string(opt.threads));
-    v.check("smooth_volume");  // the volume's own invariants (lib/core/volume.h)
 }
-
-}  // namespace
 
 int default_iterations(SmoothMode mode) {
     switch (mode) {

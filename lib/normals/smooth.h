@@ -266,4 +266,10 @@ struct SmoothReport {
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt = {}, Progress* progress = nullptr,
                            NormalMap* normal_map = nullptr);
 
+/// Checks every field of opt as smooth_volume does before any work; a caller that does other work first (the
+/// pipeline's scan conversion) checks them up front with it.
+/// \throw InvalidInput "who: prefix<field> must be ..., got ..." for the first bad field.
+void validate_smooth_options(const SmoothOptions& opt, const std::string& who = "smooth_volume",
+                             const std::string& prefix = "");
+
 }  // namespace normalflow

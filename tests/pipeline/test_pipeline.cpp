@@ -270,6 +270,14 @@ TEST(Pipeline, BadOptionsThrowInvalidInputNamingTheField) {
     expect_field("length_scale", [](PipelineOptions& o) { o.length_scale = -1; });
     expect_field("smooth.mu", [](PipelineOptions& o) { o.smooth.mu = -0.1f; });
     expect_field("smooth.alpha", [](PipelineOptions& o) { o.smooth.alpha = std::nanf(""); });
+    // the engine's fields that only smooth_volume checked, after the scan conversion
+    expect_field("smooth.tv_lambda", [](PipelineOptions& o) { o.smooth.tv_lambda = 0; });
+    expect_field("smooth.normal_dt", [](PipelineOptions& o) { o.smooth.normal_dt = -1; });
+    expect_field("smooth.refit_dt", [](PipelineOptions& o) { o.smooth.refit_dt = 0; });
+    expect_field("smooth.refit_max_steps", [](PipelineOptions& o) { o.smooth.refit_max_steps = -1; });
+    expect_field("smooth.refit_super_steps", [](PipelineOptions& o) { o.smooth.refit_super_steps = -1; });
+    expect_field("smooth.refit_tolerance", [](PipelineOptions& o) { o.smooth.refit_tolerance = -1; });
+    expect_field("smooth.active_band", [](PipelineOptions& o) { o.smooth.active_band = 6; });
     expect_field("target_faces", [](PipelineOptions& o) { o.target_faces = 2; });
     expect_field("fit.vertex_steps", [](PipelineOptions& o) { o.fit.vertex_steps = -1; });
     expect_field("fit.boundary_rings", [](PipelineOptions& o) { o.fit.boundary_rings = -1; });
