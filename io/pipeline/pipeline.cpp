@@ -737,10 +737,11 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     }
     result.mesh = std::move(fitted);
     // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
-    // pushed through each other. The vertices of faces that now intersect (or lost their area) go back to where the
-    // input had them, until none does: the kept mesh has no intersection the input did not have.
-    // Nor may a face turn over against the smoothed surface where the input's face did not: its vertices go back
-    // too. Giving vertices back for one reason can break the other, so the two alternate until both hold.
+    // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward where
+    // the input had them (halfway each round, all the way in the end), until none does: the kept mesh has no
+    // intersection the input did not have. Nor may a face turn over against the smoothed surface where the input's
+    // face did not: its vertices move back the same way. Moving vertices back for one reason can break the other, so
+    // the two alternate until both hold.
     {
         const std::vector<char> input_against = faces_against_volume(m, v);
         r.input_flipped_faces = std::count(input_against.begin(), input_against.end(), char(1));
