@@ -22,7 +22,7 @@ struct TetmeshOptions {
     /// encroaches on the surface, so the slivers at the surface are left to the optimiser
     /// (max_dihedral_deg). 15 with max_dihedral_deg 150 gave at least 12.5° on every evenly remeshed
     /// fandisk surface tried (18 of them) where 10 with TetGen's own 165 gave 7.3–9.5° on all of them
-    /// (benchmarks/README.md, "Tetrahedra fit for simulation"); 20 did not finish in two minutes.
+    /// (docs/history/benchmarks-2026.md, "Tetrahedra fit for simulation"); 20 did not finish in two minutes.
     double min_dihedral_deg = 15.0;
     /// Largest dihedral angle TetGen's optimiser aims for, degrees (the third -q field, TetGen's
     /// optmaxdihedral; its own default is 165), in (90, 180). The optimiser only works on tetrahedra

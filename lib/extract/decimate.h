@@ -4,7 +4,8 @@
 /// manifold mesh manifold: every collapse passes the link condition (Dey, Edelsbrunner, Guha &
 /// Nekhayev 1999), turns no face by more than max_normal_change_deg and makes no face degenerate or
 /// worse-shaped below min_quality. Free of GPL code; deterministic; fandisk extracted at resolution 256
-/// (1.1 M faces) to 20,000 faces in under 2 seconds on 2 cores (benchmarks/README.md, "Decimation").
+/// (1.1 M faces) to 20,000 faces in under 2 seconds on 2 cores (docs/history/benchmarks-2026.md,
+/// "Decimation").
 
 #include <cstddef>
 

@@ -92,7 +92,7 @@ TEST(NeighbourhoodFilters, CleanBoxIsHarmedLessThanByTheDiffusions) {
     // First do no harm. A clean box through the filter: the edges come out much closer to the
     // box's own extraction than through the paper's anisotropic diffusion (the engine's default,
     // which rounds them), and the faces stay within a few degrees of flat. Not yet within half a
-    // degree of the extraction (issue 19's target; see benchmarks/README.md).
+    // degree of the extraction (issue 19's target; see docs/history/benchmarks-2026.md).
     const Vec3d c(20.3, 19.6, 20.2), e(11, 9, 10);
     const Volume v0 = make_volume(40, 1.0, box_sdf(c, e));
     const BoxNormalError floor = box_normal_error(extract_surface(v0), c, e, 2.5);

@@ -706,7 +706,7 @@ TEST(SmoothVolume, OptionsOutOfRangeThrowInvalidInput) {
 
 TEST(SmoothVolume, ZeroIterationsRunsTheModesDefault) {
     // iterations = 0 (the default) runs default_iterations(mode): anisotropic needs twice the
-    // isotropic count (its robust µ takes several iterations to come down, benchmarks/README.md)
+    // isotropic count (its robust µ takes several iterations to come down, docs/history/benchmarks-2026.md)
     EXPECT_EQ(default_iterations(SmoothMode::Anisotropic), 16);
     EXPECT_EQ(default_iterations(SmoothMode::Isotropic), 8);
     EXPECT_EQ(default_iterations(SmoothMode::MeanCurvature), 8);
