@@ -1,5 +1,5 @@
 # Writes the man page of the normalflow tool with help2man: the top-level --help and --version, and a COMMANDS
-# section with each subcommand's --help (as the tool prints it, so the page never disagrees with the tool).
+# section with each subcommand's --help-all (as the tool prints it, so the page never disagrees with the tool).
 #   cmake -DTOOL=<normalflow> -DHELP2MAN=<help2man> -DOUT=<normalflow.1> -DWORK=<dir> -P make_man.cmake
 execute_process(COMMAND ${TOOL} --help OUTPUT_VARIABLE top RESULT_VARIABLE rc)
 if(NOT rc EQUAL 0)
@@ -13,11 +13,11 @@ foreach(line IN LISTS lines)
     list(APPEND names ${CMAKE_MATCH_1})
   endif()
 endforeach()
-set(h2m "[DESCRIPTION]\nnormalflow smooths, remeshes and compares triangle meshes and volumes through the level sets of a signed\ndistance volume and a normal map filtered on the surface (Tasdizen, Whitaker, Burchard and Osher, ACM TOG 2003).\nRun \\fBnormalflow\\fR \\fICOMMAND\\fR \\fB--help\\fR for a command's flags; they are listed below.\n\n[COMMANDS]\n")
+set(h2m "[DESCRIPTION]\nnormalflow smooths, remeshes and compares triangle meshes and volumes through the level sets of a signed\ndistance volume and a normal map filtered on the surface (Tasdizen, Whitaker, Burchard and Osher, ACM TOG 2003).\nRun \\fBnormalflow\\fR \\fICOMMAND\\fR \\fB--help\\fR for a command's main flags, \\fB--help-all\\fR for all of them; all are listed below.\n\n[COMMANDS]\n")
 foreach(n IN LISTS names)
-  execute_process(COMMAND ${TOOL} ${n} --help OUTPUT_VARIABLE help RESULT_VARIABLE rc)
+  execute_process(COMMAND ${TOOL} ${n} --help-all OUTPUT_VARIABLE help RESULT_VARIABLE rc)
   if(NOT rc EQUAL 0)
-    message(FATAL_ERROR "make_man: ${TOOL} ${n} --help failed")
+    message(FATAL_ERROR "make_man: ${TOOL} ${n} --help-all failed")
   endif()
   string(REPLACE "\\" "\\e" help "${help}")
   string(REGEX REPLACE "Usage: [^ ]*normalflow" "Usage: normalflow" help "${help}")

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -118,27 +119,6 @@ int guarded(const char* command, int (*fn)(void*), void* ctx) {
     }
 }
 
-std::size_t parse_bytes(const std::string& text, const char* option) {
-    char* end = nullptr;
-    const double value = std::strtod(text.c_str(), &end);
-    std::string rest(end ? end : "");
-    if (!rest.empty() && (rest.back() == 'B' || rest.back() == 'b')) rest.pop_back();
-    double unit = 0;  // 0: not a known suffix
-    if (rest.empty())
-        unit = 1;
-    else if (rest == "K" || rest == "k")
-        unit = 1024.0;
-    else if (rest == "M" || rest == "m")
-        unit = 1024.0 * 1024;
-    else if (rest == "G" || rest == "g")
-        unit = 1024.0 * 1024 * 1024;
-    else if (rest == "T" || rest == "t")
-        unit = 1024.0 * 1024 * 1024 * 1024;
-    if (end == text.c_str() || unit == 0 || !(value > 0) || !std::isfinite(value))
-        throw InvalidInput(std::string(option) + ": '" + text + "' is not a size (examples: 4G, 512M, 100000)");
-    return static_cast<std::size_t>(value * unit);
-}
-
 void add_output_flags(CLI::App* cmd, OutputFlags& out) {
     cmd->add_flag("--json", out.json, "print one JSON object on the last line of standard output");
     cmd->add_flag("-q,--quiet", out.quiet, "print nothing but errors");
@@ -190,7 +170,8 @@ void apply_config_file(CLI::App* cmd) {
         if (!item.parents.empty() && !(item.parents.size() == 1 && item.parents[0] == cmd->get_name()))
             throw InvalidInput(file + ": [" + item.parents[0] + "]: only the [" + cmd->get_name() +
                                "] section applies here");
-        std::string name = item.name;
+        std::string name = item.name;  // target_faces as target-faces: a report's "parameters" keys
+        std::replace(name.begin(), name.end(), '_', '-');
         std::vector<std::string> inputs = item.inputs;
         CLI::Option* op = cmd->get_option_no_throw("--" + name);
         if (!op && inputs.size() == 1 && (inputs[0] == "true" || inputs[0] == "false") &&

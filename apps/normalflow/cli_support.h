@@ -12,9 +12,9 @@
 #include "core/mesh.h"
 #include "core/progress.h"
 #include "core/stopwatch.h"
-#include "io/pipeline/pipeline.h"       // Decimator
-#include "io/pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
 #include "io/util/json.h"
+#include "pipeline/pipeline.h"       // Decimator
+#include "pipeline/system_memory.h"  // peak_memory_bytes, available_memory_bytes, format_bytes
 
 namespace normalflow::cli {
 
@@ -47,10 +47,6 @@ private:
 /// Installs the SIGINT/SIGTERM handler that makes should_stop() true.
 void install_interrupt_handler();
 bool interrupted();
-
-/// "4G", "512M", "1.5g", "100000": a byte count (K, M, G, T are powers of 1024).
-/// \throw InvalidInput naming the option for anything else.
-std::size_t parse_bytes(const std::string& text, const char* option);
 
 /// The per-vertex attributes m has, as JSON names ("normals", "colors", "texcoords") and as words for a
 /// text line ("normals, colours, texture coordinates"; "none").

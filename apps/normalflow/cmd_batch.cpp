@@ -22,13 +22,14 @@
 #include <thread>
 #include <vector>
 
+#include "cli_options.h"
 #include "commands.h"
 #include "core/errors.h"
 #include "core/version.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
-#include "io/pipeline/report_json.h"
-#include "pipeline_options.h"
+#include "pipeline/options.h"
+#include "pipeline/pipeline.h"
+#include "pipeline/report_json.h"
 
 namespace normalflow::cli {
 
@@ -44,9 +45,7 @@ struct BatchArgs {
     bool recursive = false;
     bool overwrite = false;
     unsigned jobs = 1;
-    PipelineOptions pipeline;
-    VolumeInput volume;
-    DracoOptions draco;
+    RunOptions run = default_options(Command::Smooth);  ///< smooth's options
     OutputFlags out;
 };
 
@@ -131,10 +130,12 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
     PipelineReport report;
     Json j = Json::object();
     if (is_volume_path(job.input)) {
-        if (opt.scan.resolution != 0)
-            throw InvalidInput(job.input + ": --resolution applies to a mesh input; a volume keeps its grid");
-        VolumeInput vin = a.volume;
-        vin.voxel_size = opt.scan.voxel_size;
+        VolumeInput vin;
+        try {
+            vin = volume_input(a.run);
+        } catch (const InvalidInput& e) {
+            throw InvalidInput(job.input + ": " + e.what());
+        }
         opt.scan.voxel_size = 0;
         VolumeReadInfo info;
         Volume v = read_volume(job.input, vin, &info);
@@ -142,17 +143,22 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
         PipelineResult r = smooth_volume_input(v, opt, &progress);
         result = std::move(r.mesh);
         report = std::move(r.report);
-        j.set("parameters", parameters_json(opt, report, v.grid.voxel_size));
+        j.set("parameters", parameters_json(a.run, Command::Smooth))
+            .set("resolved", resolved_json(opt, report, v.grid.voxel_size, false));
         j.set("input", Json::object().set("format", info.format).set("surface", info.surface));
     } else {
-        if (a.volume.iso || a.volume.label || a.volume.negate)
-            throw InvalidInput(job.input + ": --iso, --label and --negate apply to a volume input");
+        try {
+            refuse_volume_options(a.run);
+        } catch (const InvalidInput& e) {
+            throw InvalidInput(job.input + ": " + e.what());
+        }
         ReadInfo info;
         const Mesh mesh = read_mesh(job.input, &info);
         PipelineResult r = smooth_mesh(mesh, opt, &progress);
         result = std::move(r.mesh);
         report = std::move(r.report);
-        j.set("parameters", parameters_json(opt, report, report.scan.grid.voxel_size));
+        j.set("parameters", parameters_json(a.run, Command::Smooth))
+            .set("resolved", resolved_json(opt, report, report.scan.grid.voxel_size, true));
         j.set("input", Json::object()
                            .set("format", info.format)
                            .set("vertices", mesh.positions.size())
@@ -161,7 +167,7 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
     fs::create_directories(fs::path(job.output).parent_path());
     WriteOptions wo;
     wo.glb = GlbEncoding::Draco;
-    wo.draco = a.draco;
+    wo.draco = a.run.draco;
     write_mesh(job.output, result, wo);
     triangles = result.triangles.size();
     j.set("output", Json::object().set("vertices", result.positions.size()).set("triangles", triangles));
@@ -171,9 +177,7 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
 
 int run_batch(const BatchArgs& a) {
     Stopwatch total;
-    PipelineOptions opt = a.pipeline;
-    opt.smoothing = true;
-    opt.smooth.threads = opt.scan.threads;
+    PipelineOptions opt = pipeline_options(a.run, Command::Smooth);
     validate(opt);
     if (mesh_format_from_path("x." + a.format) == MeshFormat::Unknown)
         throw InvalidInput("--format " + a.format + ": expected ply, obj, off, stl, glb or drc");
@@ -279,13 +283,7 @@ void add_batch_command(CLI::App& app) {
     cmd->add_option("-j,--jobs", a->jobs, "files at once (each uses the threads; results do not depend on it)")
         ->check(CLI::Range(1u, 1024u))
         ->capture_default_str();
-    add_grid_options(cmd, a->pipeline);
-    add_volume_input_options(cmd, a->volume, /*voxel_size=*/false);
-    add_smooth_options(cmd, a->pipeline);
-    add_config_option(cmd);
-    add_decimation_options(cmd, a->pipeline);
-    add_draco_options(cmd, a->draco);
-    add_output_flags(cmd, a->out);
+    add_run_options(cmd, a->run, Command::Smooth, a->out);
     on_run(cmd, a, run_batch);
 }
 

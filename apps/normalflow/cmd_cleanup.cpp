@@ -8,8 +8,8 @@
 #include "core/mesh_report.h"
 #include "io/cgal/cleanup.h"  // plain option and report structs; the code needs CGAL
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
-#include "io/pipeline/report_json.h"
+#include "pipeline/pipeline.h"
+#include "pipeline/report_json.h"
 
 namespace normalflow::cli {
 namespace {

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "cli_options.h"
 #include "commands.h"
 #include "core/errors.h"
 #include "io/io.h"
@@ -14,7 +15,7 @@ namespace {
 
 struct CompressArgs {
     std::string input, output;
-    DracoOptions draco;
+    RunOptions run = default_options(Command::Compress);  ///< its Draco settings
     OutputFlags out;
 };
 
@@ -27,7 +28,7 @@ int run_compress(const CompressArgs& a) {
     const double t_read = clock.lap();
     WriteOptions wo;
     wo.glb = GlbEncoding::Draco;
-    wo.draco = a.draco;
+    wo.draco = a.run.draco;
     write_mesh(a.output, m, wo);
     const double t_write = clock.lap();
     const auto in_bytes = std::filesystem::file_size(a.input);
@@ -46,10 +47,7 @@ int run_compress(const CompressArgs& a) {
             .set("bytes_raw", raw)
             .set("bytes_after", static_cast<std::size_t>(out_bytes))
             .set("attributes", Json::array(attribute_names(m)))
-            .set("position_bits", a.draco.position_bits)
-            .set("normal_bits", a.draco.normal_bits)
-            .set("texcoord_bits", a.draco.texcoord_bits)
-            .set("compression_level", a.draco.compression_level)
+            .set("parameters", parameters_json(a.run, Command::Compress))
             .set("seconds_read", t_read)
             .set("seconds_compress", t_write);
         std::printf("%s\n", j.dump().c_str());
@@ -64,29 +62,12 @@ int run_compress(const CompressArgs& a) {
 
 }  // namespace
 
-void add_draco_options(CLI::App* cmd, DracoOptions& d) {
-    cmd->add_option("--position-bits", d.position_bits, "quantization bits per position axis")
-        ->check(CLI::Range(1, 30))
-        ->capture_default_str();
-    cmd->add_option("--normal-bits", d.normal_bits, "quantization bits per normal component")
-        ->check(CLI::Range(1, 30))
-        ->capture_default_str();
-    cmd->add_option("--texcoord-bits", d.texcoord_bits, "quantization bits per texture coordinate component")
-        ->check(CLI::Range(1, 30))
-        ->capture_default_str();
-    cmd->add_option("--level", d.compression_level, "compression level 0 (fast) .. 10 (small)")
-        ->check(CLI::Range(0, 10))
-        ->capture_default_str();
-    cmd->add_flag("--fallback", d.fallback, ".glb: also store uncompressed buffers for viewers without Draco");
-}
-
 void add_compress_command(CLI::App& app) {
     auto a = std::make_shared<CompressArgs>();
     auto* cmd = app.add_subcommand("compress", "write a mesh as Draco (.drc) or Draco-compressed glTF (.glb)");
     cmd->add_option("IN", a->input, "mesh file")->required();
     cmd->add_option("OUT", a->output, "output .drc or .glb")->required();
-    add_draco_options(cmd, a->draco);
-    add_output_flags(cmd, a->out);
+    add_run_options(cmd, a->run, Command::Compress, a->out);
     on_run(cmd, a, run_compress);
 }
 

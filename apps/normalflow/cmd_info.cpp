@@ -8,7 +8,7 @@
 #include "commands.h"
 #include "core/mesh_report.h"
 #include "io/io.h"
-#include "io/pipeline/report_json.h"
+#include "pipeline/report_json.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/repair.h"
 #endif

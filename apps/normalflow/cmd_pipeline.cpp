@@ -1,5 +1,5 @@
 // normalflow voxelize / extract / smooth: the pipeline read → repair → scan_convert → smooth → extract →
-// write. The stages between read and write are the library's smooth_mesh (io/pipeline/pipeline.h);
+// write. The stages between read and write are the library's smooth_mesh (pipeline/pipeline.h);
 // the flags parse straight into its PipelineOptions, so every default is the library's.
 #include <algorithm>
 #include <cstdio>
@@ -7,14 +7,15 @@
 #include <memory>
 #include <string>
 
+#include "cli_options.h"
 #include "commands.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "core/version.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
-#include "io/pipeline/report_json.h"
-#include "pipeline_options.h"
+#include "pipeline/options.h"
+#include "pipeline/pipeline.h"
+#include "pipeline/report_json.h"
 
 namespace normalflow::cli {
 
@@ -32,32 +33,10 @@ std::string triangles_note(const Mesh& m, const PipelineReport& r) {
 
 namespace {
 
-struct VoxelizeArgs {
+/// The files and the options of voxelize, extract, smooth or remesh (the command's RunOptions: default_options).
+struct PipelineArgs {
     std::string input, output;
-    PipelineOptions pipeline;
-    OutputFlags out;
-};
-
-struct ExtractArgs {
-    std::string input, output;
-    PipelineOptions pipeline;  ///< its decimation options; extraction runs without smoothing
-    VolumeInput volume;        ///< how a dense volume file's values are read
-    OutputFlags out;
-};
-
-struct RemeshArgs {
-    std::string input, output;
-    PipelineOptions pipeline;
-    DracoOptions draco;  ///< quantization and level for .drc / .glb outputs
-    OutputFlags out;
-};
-
-struct SmoothArgs {
-    std::string input, output;
-    PipelineOptions pipeline;
-    VolumeInput volume;       ///< how a dense volume file's values are read (a volume input)
-    bool normal_map = false;  ///< a .vdb output also holds the filtered normal map
-    DracoOptions draco;       ///< quantization and level for .drc / .glb outputs
+    RunOptions run;
     OutputFlags out;
 };
 
@@ -134,6 +113,13 @@ Json report_json(const char* command, const PipelineReport& r, double t_read, co
     return j;
 }
 
+/// The report's "parameters" (the options as given: a config file that repeats the run) and "resolved" (what
+/// the run decided for the automatic ones).
+void set_parameters(Json& j, const RunOptions& run, Command c, const PipelineOptions& opt, const PipelineReport& r,
+                    double voxel_size, bool scan_converted) {
+    j.set("parameters", parameters_json(run, c)).set("resolved", resolved_json(opt, r, voxel_size, scan_converted));
+}
+
 void write_result(const std::string& output, const Mesh& m, TerminalProgress& progress, Json& j,
                   const DracoOptions& draco = {}) {
     Stopwatch clock;
@@ -156,13 +142,12 @@ void finish(Json& j, const OutputFlags& f, const Stopwatch& total, TerminalProgr
     for (const std::string& w : j["warnings"].strings()) progress.note("warning: " + w);
 }
 
-int run_voxelize(const VoxelizeArgs& a) {
+int run_voxelize(const PipelineArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
     if (!is_volume_output_path(a.output))
         throw InvalidInput("voxelize: " + a.output + ": the output must be a .vdb or .nrrd file");
-    PipelineOptions opt = a.pipeline;
-    opt.smoothing = false;
+    const PipelineOptions opt = pipeline_options(a.run, Command::Voxelize);
     progress.begin("read");
     Stopwatch clock;
     ReadInfo info;
@@ -171,7 +156,7 @@ int run_voxelize(const VoxelizeArgs& a) {
     PipelineReport r;
     const Volume v = naming(a.input, [&] { return mesh_to_volume(mesh, opt, &r, &progress); });
     Json j = report_json("voxelize", r, t_read, &info);
-    j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
+    set_parameters(j, a.run, Command::Voxelize, opt, r, v.grid.voxel_size, true);
     j.set("input", input_json(a.input, info, mesh, r));
     j["voxelize"].set("band_half_width", v.half_width).set("memory_bytes", v.memory_bytes());
     clock.lap();
@@ -186,20 +171,20 @@ int run_voxelize(const VoxelizeArgs& a) {
     return 0;
 }
 
-int run_extract(const ExtractArgs& a) {
+int run_extract(const PipelineArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
     progress.begin("read");
     Stopwatch clock;
-    const Volume v = read_volume(a.input, a.volume);
+    PipelineOptions opt = pipeline_options(a.run, Command::Extract);
+    const Volume v = read_volume(a.input, volume_input(a.run));
+    opt.scan.voxel_size = 0;  // the volume's, resampled by read_volume
     const double t_read = clock.seconds();
-    PipelineOptions opt = a.pipeline;
-    opt.smoothing = false;
     PipelineReport r;
     const Mesh m = naming(a.input, [&] { return volume_to_mesh(v, opt, &r, &progress); });
     Json j = Json::object();
     j.set("command", "extract").set("extract", to_json(r.extract));
-    j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
+    set_parameters(j, a.run, Command::Extract, opt, r, v.grid.voxel_size, false);
     if (r.decimated) j.set("decimate", to_json(r.decimate).set("default", r.compacted));
     j.set("seconds",
           Json::object().set("read", t_read).set("extract", r.seconds.extract).set("decimate", r.seconds.decimate));
@@ -212,14 +197,9 @@ int run_extract(const ExtractArgs& a) {
 
 /// smooth with a volume file in: read (iso, label, resampling, placement), the engine, then the volume or
 /// its extracted surface out.
-int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out, const Stopwatch& total,
+int run_smooth_volume(const PipelineArgs& a, PipelineOptions opt, bool volume_out, const Stopwatch& total,
                       TerminalProgress& progress) {
-    if (opt.scan.resolution != 0)
-        throw InvalidInput(
-            "smooth: " + a.input +
-            ": --resolution applies to a mesh input; a volume keeps its grid (--voxel-size resamples it)");
-    VolumeInput vin = a.volume;
-    vin.voxel_size = opt.scan.voxel_size;
+    const VolumeInput vin = naming(a.input, [&] { return volume_input(a.run); });
     opt.scan.voxel_size = 0;
     progress.begin("read");
     Stopwatch clock;
@@ -231,7 +211,7 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     // for isotropic files).
     set_volume_length_scale(opt, info);
     const PipelineResult result = naming(a.input, [&] {
-        return smooth_volume_input(v, opt, &progress, /*want_mesh=*/!volume_out, a.normal_map ? &normals : nullptr);
+        return smooth_volume_input(v, opt, &progress, /*want_mesh=*/!volume_out, a.run.normal_map ? &normals : nullptr);
     });
     const PipelineReport& r = result.report;
     Json j = Json::object();
@@ -239,7 +219,7 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
         .set("mode", to_string(opt.smooth.mode))
         .set("input", volume_input_json(a.input, info, v));
     j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
-    j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
+    set_parameters(j, a.run, Command::Smooth, opt, r, v.grid.voxel_size, false);
     if (!volume_out) j.set("extract", to_json(r.extract));
     if (r.decimated) j.set("decimate", to_json(r.decimate));
     Json sec = Json::object();
@@ -247,9 +227,9 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     if (!volume_out) sec.set("extract", r.seconds.extract).set("decimate", r.seconds.decimate);
     j.set("seconds", sec).set("warnings", Json::array(r.warnings));
     if (volume_out) {
-        write_volume_result(a.output, v, progress, j, a.normal_map ? &normals : nullptr);
+        write_volume_result(a.output, v, progress, j, a.run.normal_map ? &normals : nullptr);
     } else {
-        write_result(a.output, result.mesh, progress, j, a.draco);
+        write_result(a.output, result.mesh, progress, j, a.run.draco);
     }
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" +
@@ -259,12 +239,10 @@ int run_smooth_volume(const SmoothArgs& a, PipelineOptions opt, bool volume_out,
     return 0;
 }
 
-int run_smooth(const SmoothArgs& a) {
+int run_smooth(const PipelineArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
-    PipelineOptions opt = a.pipeline;
-    opt.smoothing = true;
-    opt.smooth.threads = opt.scan.threads;  // --threads sets both stages
+    const PipelineOptions opt = pipeline_options(a.run, Command::Smooth);
     validate(opt);
     // Fail on a bad output path before the long computation.
     const bool volume_out = is_volume_output_path(a.output);
@@ -272,11 +250,10 @@ int run_smooth(const SmoothArgs& a) {
         throw InvalidInput(
             "smooth: " + a.output +
             ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc; .vdb or .nrrd for the volume)");
-    if (a.normal_map && !is_vdb_path(a.output))
+    if (a.run.normal_map && !is_vdb_path(a.output))
         throw InvalidInput("smooth: " + a.output + ": --normal-map is written into a .vdb output");
     if (is_volume_path(a.input)) return run_smooth_volume(a, opt, volume_out, total, progress);
-    if (a.volume.iso || a.volume.label || a.volume.negate)
-        throw InvalidInput("smooth: " + a.input + ": --iso, --label and --negate apply to a volume input");
+    naming(a.input, [&] { refuse_volume_options(a.run); });
     progress.begin("read");
     Stopwatch clock;
     ReadInfo info;
@@ -288,11 +265,11 @@ int run_smooth(const SmoothArgs& a) {
         NormalMap normals;
         Volume v = naming(a.input, [&] { return mesh_to_volume(mesh, opt, &r, &progress); });
         naming(a.input, [&] {
-            smooth_volume_stage(v, opt, model_length_scale(mesh), &r, &progress, a.normal_map ? &normals : nullptr);
+            smooth_volume_stage(v, opt, model_length_scale(mesh), &r, &progress, a.run.normal_map ? &normals : nullptr);
         });
         Json j = report_json("smooth", r, t_read, &info);
         j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
-        j.set("parameters", parameters_json(opt, r, v.grid.voxel_size));
+        set_parameters(j, a.run, Command::Smooth, opt, r, v.grid.voxel_size, true);
         write_volume_result(a.output, v, progress, j, &normals);
         finish(j, a.out, total, progress);
         progress.note("smooth: " + a.output + " (the smoothed volume, " + std::to_string(v.block_count()) + " blocks)");
@@ -303,7 +280,7 @@ int run_smooth(const SmoothArgs& a) {
     const Mesh& m = result.mesh;
     Json j = report_json("smooth", r, t_read, &info);
     j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
-    j.set("parameters", parameters_json(opt, r, r.scan.grid.voxel_size));
+    set_parameters(j, a.run, Command::Smooth, opt, r, r.scan.grid.voxel_size, true);
     j["seconds"].set("extract", r.seconds.extract);
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
     if (r.smooth.stopped_unchanged)
@@ -314,7 +291,7 @@ int run_smooth(const SmoothArgs& a) {
     if (r.smooth.stopped_smooth)
         progress.note("smooth: stopped after main iteration " + std::to_string(r.smooth.iterations_run()) +
                       ": the filtered normal map is smooth at the filter's scale");
-    write_result(a.output, m, progress, j, a.draco);
+    write_result(a.output, m, progress, j, a.run.draco);
     finish(j, a.out, total, progress);
     progress.note("smooth: " + a.output + " (" + triangles_note(m, r) + ", " +
                   (r.connectivity_kept ? "the input's mesh, fitted, " : "") +
@@ -322,13 +299,10 @@ int run_smooth(const SmoothArgs& a) {
     return 0;
 }
 
-int run_remesh(const RemeshArgs& a) {
+int run_remesh(const PipelineArgs& a) {
     Stopwatch total;
     TerminalProgress progress(a.out);
-    PipelineOptions opt = a.pipeline;
-    opt.smoothing = false;
-    opt.connectivity = Connectivity::Remesh;
-    opt.smooth.threads = opt.scan.threads;
+    const PipelineOptions opt = pipeline_options(a.run, Command::Remesh);
     validate(opt);
     if (mesh_format_from_path(a.output) == MeshFormat::Unknown)
         throw InvalidInput("remesh: " + a.output + ": unknown output format (use .ply, .obj, .off, .stl, .glb, .drc)");
@@ -341,10 +315,10 @@ int run_remesh(const RemeshArgs& a) {
     const PipelineReport& r = result.report;
     Json j = report_json("remesh", r, t_read, &info);
     j.set("input", input_json(a.input, info, mesh, r));
-    j.set("parameters", parameters_json(opt, r, r.scan.grid.voxel_size));
+    set_parameters(j, a.run, Command::Remesh, opt, r, r.scan.grid.voxel_size, true);
     j["seconds"].set("extract", r.seconds.extract);
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
-    write_result(a.output, result.mesh, progress, j, a.draco);
+    write_result(a.output, result.mesh, progress, j, a.run.draco);
     finish(j, a.out, total, progress);
     progress.note("remesh: " + a.output + " (" + triangles_note(result.mesh, r) + ")");
     return 0;
@@ -352,63 +326,47 @@ int run_remesh(const RemeshArgs& a) {
 
 }  // namespace
 
+namespace {
+
+/// Registers cmd's files and options (the table's, cli_options.h) to run fn.
+void add_pipeline_command(CLI::App* cmd, Command c, const char* in, const char* out, int (*fn)(const PipelineArgs&)) {
+    auto a = std::make_shared<PipelineArgs>();
+    a->run = default_options(c);
+    cmd->add_option("IN", a->input, in)->required();
+    cmd->add_option("OUT", a->output, out)->required();
+    add_run_options(cmd, a->run, c, a->out);
+    on_run(cmd, a, fn);
+}
+
+}  // namespace
+
 void add_voxelize_command(CLI::App& app) {
-    auto a = std::make_shared<VoxelizeArgs>();
-    auto* cmd = app.add_subcommand("voxelize", "scan-convert a mesh into a narrow-band signed distance volume");
-    cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
-    cmd->add_option("OUT", a->output, "volume file (.vdb or .nrrd)")->required();
-    add_grid_options(cmd, a->pipeline);
-    cmd->add_option("--band", a->pipeline.scan.half_width, "band half-width in voxels")
-        ->check(CLI::Range(1.0, 64.0))
-        ->capture_default_str();
-    add_output_flags(cmd, a->out);
-    on_run(cmd, a, run_voxelize);
+    add_pipeline_command(
+        app.add_subcommand("voxelize", "scan-convert a mesh into a narrow-band signed distance volume"),
+        Command::Voxelize, "mesh file (obj, ply, off, stl, gltf, glb, drc)", "volume file (.vdb or .nrrd)",
+        run_voxelize);
 }
 
 void add_extract_command(CLI::App& app) {
-    auto a = std::make_shared<ExtractArgs>();
-    auto* cmd = app.add_subcommand("extract", "extract the zero level set of a volume as a closed manifold mesh");
-    cmd->add_option("IN", a->input, "volume file (.vdb, .nrrd, .nhdr, .nii, .nii.gz)")->required();
-    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
-    add_volume_input_options(cmd, a->volume, /*voxel_size=*/true);
-    add_decimation_options(cmd, a->pipeline);
-    add_output_flags(cmd, a->out);
-    on_run(cmd, a, run_extract);
+    add_pipeline_command(
+        app.add_subcommand("extract", "extract the zero level set of a volume as a closed manifold mesh"),
+        Command::Extract, "volume file (.vdb, .nrrd, .nhdr, .nii, .nii.gz)", "mesh file (ply, obj, off, stl, glb, drc)",
+        run_extract);
 }
 
 void add_remesh_command(CLI::App& app) {
-    auto a = std::make_shared<RemeshArgs>();
-    auto* cmd = app.add_subcommand(
-        "remesh", "re-mesh any mesh as a closed manifold surface through its volume, creases and corners kept");
-    cmd->add_option("IN", a->input, "mesh file (obj, ply, off, stl, gltf, glb, drc)")->required();
-    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc)")->required();
-    add_grid_options(cmd, a->pipeline);
-    add_remesh_options(cmd, a->pipeline);
-    add_decimation_options(cmd, a->pipeline);
-    add_draco_options(cmd, a->draco);
-    add_config_option(cmd);
-    add_output_flags(cmd, a->out);
-    on_run(cmd, a, run_remesh);
+    add_pipeline_command(
+        app.add_subcommand(
+            "remesh", "re-mesh any mesh as a closed manifold surface through its volume, creases and corners kept"),
+        Command::Remesh, "mesh file (obj, ply, off, stl, gltf, glb, drc)", "mesh file (ply, obj, off, stl, glb, drc)",
+        run_remesh);
 }
 
 void add_smooth_command(CLI::App& app) {
-    auto a = std::make_shared<SmoothArgs>();
-    auto* cmd = app.add_subcommand("smooth", "voxelize, filter the normal map and refit, extract (the whole pipeline)");
-    cmd->add_option("IN", a->input,
-                    "mesh file (obj, ply, off, stl, gltf, glb, drc) or volume file (vdb, nrrd, nhdr, nii, nii.gz)")
-        ->required();
-    cmd->add_option("OUT", a->output, "mesh file (ply, obj, off, stl, glb, drc) or volume file (vdb, nrrd)")
-        ->required();
-    add_grid_options(cmd, a->pipeline);
-    add_volume_input_options(cmd, a->volume, /*voxel_size=*/false);
-    add_smooth_options(cmd, a->pipeline);
-    add_config_option(cmd);
-    cmd->add_flag("--normal-map", a->normal_map,
-                  "with a .vdb output: also write the filtered normal map, a vector grid \"normals\"");
-    add_decimation_options(cmd, a->pipeline);
-    add_draco_options(cmd, a->draco);
-    add_output_flags(cmd, a->out);
-    on_run(cmd, a, run_smooth);
+    add_pipeline_command(
+        app.add_subcommand("smooth", "voxelize, filter the normal map and refit, extract (the whole pipeline)"),
+        Command::Smooth, "mesh file (obj, ply, off, stl, gltf, glb, drc) or volume file (vdb, nrrd, nhdr, nii, nii.gz)",
+        "mesh file (ply, obj, off, stl, glb, drc) or volume file (vdb, nrrd)", run_smooth);
 }
 
 }  // namespace normalflow::cli

@@ -9,8 +9,8 @@
 #include "core/errors.h"
 #include "io/cgal/cleanup.h"  // plain option and report structs; the code needs CGAL
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "io/tetgen/tetmesh.h"  // plain option and report structs; the code needs TetGen
+#include "pipeline/pipeline.h"
 
 namespace normalflow::cli {
 namespace {

@@ -24,7 +24,4 @@ void add_compress_command(CLI::App& app);   // cmd_compress.cpp
 void add_cleanup_command(CLI::App& app);    // cmd_cleanup.cpp
 void add_tetmesh_command(CLI::App& app);    // cmd_tetmesh.cpp
 
-/// --position-bits, --normal-bits, --level, --fallback (compress and smooth share them).
-void add_draco_options(CLI::App* cmd, DracoOptions& d);  // cmd_compress.cpp
-
 }  // namespace normalflow::cli

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "build_licence.h"
+#include "cli_options.h"
 #include "commands.h"
 
 int main(int argc, char** argv) {
@@ -13,6 +14,9 @@ int main(int argc, char** argv) {
     CLI::App app{"normalflow: geometric surface processing via normal maps (Tasdizen et al. 2003)"};
     app.set_version_flag("--version", version_text());
     app.require_subcommand(1);
+    // Subcommands inherit both: --help lists a command's essential options, --help-all every one.
+    app.formatter(tiered_formatter());
+    app.set_help_all_flag("--help-all", "every option, also those --help leaves out");
     // One line per subcommand (declared in commands.h).
     add_info_command(app);
     add_taubin_command(app);

@@ -1,5 +1,5 @@
 # bash completion of normalflow: subcommands, each subcommand's flags, the choices of a flag that has them
-# (--mode bilateral|guided|...), and file names otherwise. It asks the tool itself (`normalflow [CMD] --help`),
+# (--mode bilateral|guided|...), and file names otherwise. It asks the tool itself (`normalflow [CMD] --help-all`),
 # so it always matches the installed version. Installed as share/bash-completion/completions/normalflow.
 _normalflow() {
     local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]} tool=${COMP_WORDS[0]}
@@ -19,14 +19,18 @@ _normalflow() {
         return
     fi
     local help
-    help=$("$tool" "$cmd" --help 2>/dev/null) || return
+    help=$("$tool" "$cmd" --help-all 2>/dev/null) || return
     if [[ $prev == --* ]]; then
-        # the flag's line: "  --mode auto|keep|remesh  help" (choices) or "  --iterations INT ..." (a value)
+        # the flag's line: "  --mode auto|keep|remesh  help" (choices), "  --iterations INT|auto ..." (a value or
+        # a word) or "  --shell FLOAT ..." (a value)
         local spec
         spec=$(printf '%s\n' "$help" | sed -n "s/^  \(-[a-zA-Z],\)\{0,1\}${prev}\( \([^ ]*\)\)\{0,1\}.*/\3/p" | head -n 1)
         spec=${spec%%=*}  # "auto|keep|remesh=auto": the default after '='
         if [[ $spec == *"|"* ]]; then
-            mapfile -t COMPREPLY < <(compgen -W "${spec//|/ }" -- "$cur")
+            # the words; a value's type (INT|auto, SIZE|auto) offers only its word
+            local words
+            words=$(printf '%s\n' ${spec//|/ } | grep -v '^[A-Z]*$')
+            mapfile -t COMPREPLY < <(compgen -W "$words" -- "$cur")
             return
         elif [[ -n $spec && $spec != FILE && $spec != TEXT ]]; then
             return  # a number or a size: nothing to offer

@@ -5,7 +5,7 @@
 //                   [--nf-threads 1,2] [--modes isotropic,anisotropic] [--mu 0.1] [--samples 100000]
 //                   [--no-itk] [mesh ...]          (default mesh: shared/data/pairs_gnf/fandisk_n0.3.ply)
 //
-// 1. mesh_to_volume (io/pipeline, the shipped pipeline's first half: repair, scan conversion with the
+// 1. mesh_to_volume (pipeline/, the shipped pipeline's first half: repair, scan conversion with the
 //    engine BVH, band 3 voxels) at the resolution; the same φ, in voxel units and clamped to ±3
 //    outside the band, is written into a dense itk::Image<float, 3> of spacing 1.
 // 2. ITK: itk::IsotropicFourthOrderLevelSetImageFilter / AnisotropicFourthOrderLevelSetImageFilter.
@@ -61,9 +61,9 @@
 #include "core/volume.h"
 #include "extract/extract_surface.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
 #include "normals/smooth.h"
+#include "pipeline/pipeline.h"
 
 using namespace normalflow;
 
@@ -295,7 +295,7 @@ int main(int argc, char** argv) {
     try {
         for (const std::string& path : meshes) {
             const Mesh mesh = read_mesh(path);
-            // The shipped pipeline's first half (io/pipeline mesh_to_volume: repair, scan conversion
+            // The shipped pipeline's first half (pipeline/ mesh_to_volume: repair, scan conversion
             // with the default distance query, the 3-voxel band of a smoothing run).
             PipelineOptions po;
             po.scan.resolution = resolution;

@@ -1,5 +1,5 @@
 // nf_bench_pipeline: end-to-end scan conversion benchmark (issue 3), through the shipped pipeline
-// (io/pipeline smooth_mesh with smoothing off: repair, scan conversion, extraction).
+// (pipeline/ smooth_mesh with smoothing off: repair, scan conversion, extraction).
 //   nf_bench_pipeline [mesh] [target_triangles] [resolution] [--no-sweep]
 // 1. Subdivides a mesh (1-to-4 midpoint) to about target_triangles (default 1M), repairs and voxelizes
 //    it at the resolution (default 512) and extracts it again: time per stage, band voxels, peak memory.
@@ -19,7 +19,7 @@
 
 #include "core/mesh.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
+#include "pipeline/pipeline.h"
 
 using namespace normalflow;
 

@@ -1,12 +1,12 @@
 // nf_bench_decimate: decimation of extracted surfaces, meshoptimizer against CGAL, in one run (issue 22).
 //
-// For each model: scan-convert at resolution R and extract (io/pipeline smooth_mesh without the
+// For each model: scan-convert at resolution R and extract (pipeline/ smooth_mesh without the
 // smoothing stage), then decimate the same extraction to N faces three ways, alternating:
 //   quadric  lib/extract decimate_mesh_qem alone (normalflow's quadric edge collapse),
 //   meshopt  io/meshopt decimate_mesh alone (meshoptimizer's simplifier),
-//   auto     io/pipeline decimate_mesh with Decimator::Auto (what --target-faces runs: the quadric
+//   auto     pipeline/ decimate_mesh with Decimator::Auto (what --target-faces runs: the quadric
 //            collapse, the checks and the distances, CGAL where a check fails),
-//   cgal     io/pipeline decimate_mesh with Decimator::Cgal (CGAL's edge collapse, the previous default).
+//   cgal     pipeline/ decimate_mesh with Decimator::Cgal (CGAL's edge collapse, the previous default).
 // Each row gives the faces, the decimation's seconds (the call's own, checks and distances excluded
 // except for "auto", whose checks are part of it), the sampled Hausdorff distance to the extraction in
 // voxels (vertices + 3 points per face, both ways), closed, manifold and self-intersecting pairs.
@@ -30,8 +30,8 @@
 #include "io/cgal/repair.h"
 #include "io/io.h"
 #include "io/meshopt/decimate.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
+#include "pipeline/pipeline.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;

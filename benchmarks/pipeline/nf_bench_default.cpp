@@ -25,9 +25,9 @@
 #include <unistd.h>
 
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "io/util/atomic_file.h"
 #include "metrics/compare.h"
+#include "pipeline/pipeline.h"
 #include "study_pairs.h"
 
 namespace fs = std::filesystem;

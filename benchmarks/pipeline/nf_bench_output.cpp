@@ -1,6 +1,6 @@
 // nf_bench_output: the output stage on real models, from scan conversion to the files users get.
 //
-// For each model: repair, scan-convert at resolution R and extract (io/pipeline smooth_mesh without
+// For each model: repair, scan-convert at resolution R and extract (pipeline/ smooth_mesh without
 // the smoothing stage; binary PLY: faces, bytes), cleanup to a target face count (faces, bytes, time, sampled Hausdorff to the extracted mesh, self-intersections
 // left), Draco .drc (bytes, encode time, sampled Hausdorff of the decoded mesh to its input), Draco
 // .glb (bytes, time), and TetGen on the decimated surface (tetrahedra, smallest dihedral angle, time).
@@ -25,8 +25,8 @@
 #include "io/cgal/cleanup.h"
 #include "io/draco/draco_io.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "io/tetgen/tetmesh.h"
+#include "pipeline/pipeline.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
             r.model = name;
             const std::string stem = fs::path(name).stem().string();
             const Mesh src = read_mesh(in.string());
-            // The shipped pipeline without the smoothing stage (io/pipeline smooth_mesh: repair, scan
+            // The shipped pipeline without the smoothing stage (pipeline/ smooth_mesh: repair, scan
             // conversion, extraction); decimation runs below, on its own, to be measured.
             PipelineOptions po;
             po.scan.resolution = resolution;

@@ -1,7 +1,7 @@
 // nf_bench_quality: quality of the normal-map engine on real noisy / ground-truth pairs.
 //
 // For every pair NAME_<noise>.ply / NAME_gt.ply in shared/data/pairs_gnf and pairs_gcn: run the
-// shipped pipeline (io/pipeline smooth_mesh: repair, scan conversion at resolution R along the
+// shipped pipeline (pipeline/ smooth_mesh: repair, scan conversion at resolution R along the
 // longest side, isotropic and anisotropic smoothing, extraction) on the noisy mesh, and report the distance and the mean normal-angle error to
 // the ground truth (surface_distance: points sampled uniformly by area on the result, angle between
 // the result's face normal there and the ground truth's face normal at the closest point), next to
@@ -23,8 +23,8 @@
 
 #include "core/mesh.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
+#include "pipeline/pipeline.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -132,7 +132,7 @@ int main(int argc, char** argv) {
         try {
             const Mesh noisy = read_mesh(p.noisy.string());
             const Mesh truth = read_mesh(p.truth.string());
-            // The shipped pipeline (io/pipeline smooth_mesh): repair, scan conversion with the default
+            // The shipped pipeline (pipeline/ smooth_mesh): repair, scan conversion with the default
             // distance query and the band rule, smoothing, extraction.
             PipelineOptions po;
             po.scan.resolution = resolution;

@@ -12,8 +12,8 @@
 #include "extract/sharpen.h"
 #include "io/cgal/repair.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/compare.h"
+#include "pipeline/pipeline.h"
 #include "sdf/closest_triangle.h"
 
 using namespace normalflow;

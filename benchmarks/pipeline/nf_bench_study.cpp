@@ -32,9 +32,9 @@
 
 #include "io/io.h"
 #include "io/openmesh/smoothing.h"
-#include "io/pipeline/pipeline.h"
 #include "io/util/atomic_file.h"
 #include "metrics/compare.h"
+#include "pipeline/pipeline.h"
 #include "study_pairs.h"
 
 namespace fs = std::filesystem;
@@ -84,7 +84,7 @@ std::pair<double, double> torus_error(const Mesh& m, double R, double r) {
     return {mx, std::sqrt(s2 / double(m.positions.size()))};
 }
 
-/// normalflow's whole pipeline on m, as the tool ships it (io/pipeline smooth_mesh: repair, scan
+/// normalflow's whole pipeline on m, as the tool ships it (pipeline/ smooth_mesh: repair, scan
 /// conversion at `resolution`, smooth_volume with the defaults, extraction).
 Mesh normalflow_smooth(const Mesh& m, int resolution, SmoothMode mode, int threads) {
     PipelineOptions o;
@@ -294,7 +294,7 @@ int main(int argc, char** argv) {
                     for (const auto& [e, deg] : sweep) {
                         Mesh d = res.mesh;
                         const double t1 = now_ms();
-                        // as the compact default runs it (compact_surface in io/pipeline/pipeline.cpp)
+                        // as the compact default runs it (compact_surface in pipeline/pipeline.cpp)
                         const DecimationReport dr = decimate_mesh(d, {.max_error = e * res.report.scan.grid.voxel_size,
                                                                       .decimator = Decimator::Quadric,
                                                                       .tangent_planes = !o.sharpen,

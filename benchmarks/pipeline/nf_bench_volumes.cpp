@@ -35,8 +35,8 @@
 #include "extract/volume_sampler.h"
 #include "io/formats/nifti.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
+#include "pipeline/pipeline.h"
 #include "sdf/image_to_volume.h"
 
 using namespace normalflow;

@@ -29,7 +29,7 @@ struct QemOptions {
     double min_quality = 0.001;
     /// > 0: no collapse whose quadric error, as a distance (QemReport::max_error's measure: the area-weighted
     /// RMS distance of the merged vertex to the planes it stands for), exceeds this (world units). Not a
-    /// bound on the Hausdorff distance: io/pipeline decimate_mesh measures that.
+    /// bound on the Hausdorff distance: pipeline/ decimate_mesh measures that.
     double max_error = 0.0;
     /// Hermite data: true to build each vertex's quadric from its own tangent plane, the plane through it
     /// normal to m.normals (weighted by a third of the area of its faces), instead of the planes of its
@@ -71,7 +71,7 @@ struct QemReport {
 /// scan keeps its outline. Each collapse keeps the mesh manifold where it was (link condition, and no
 /// vertex left with fewer than three neighbours) and is refused where it would fold a face or make it
 /// degenerate (QemOptions). Self-intersections between parts that are not neighbours are not checked:
-/// callers that need them absent check the result (io/pipeline decimate_mesh does).
+/// callers that need them absent check the result (pipeline/ decimate_mesh does).
 /// Attributes: the surviving vertices keep theirs (a merged vertex keeps the attributes of the endpoint
 /// it replaces), in their original order; unreferenced vertices are dropped. Vertex indices are taken as
 /// the connectivity: weld coincident positions first where they should be joined.

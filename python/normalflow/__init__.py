@@ -5,9 +5,10 @@ back as :class:`Mesh` objects whose ``vertices``, ``faces``, ``normals``, ``colo
 numpy views of the result (no copy). Every call returns ``(result, report)``; the report is a dict with the
 keys of the command line's ``--json``.
 
-The options of :func:`smooth`, :func:`voxelize` and :func:`extract` are the command line's flags, as keyword
-arguments (``--target-faces 20000`` is ``target_faces=20000``, ``--no-repair`` is ``repair=False``): the
-same defaults, checks and results as ``normalflow smooth``. :func:`options` lists them.
+The keyword arguments of :func:`smooth`, :func:`remesh`, :func:`voxelize` and :func:`extract` are the options of
+the command line (``--target-faces 20000`` is ``target_faces=20000``, ``--no-repair`` is ``repair=False``), from
+the library's one table: the same defaults, checks and results as ``normalflow smooth``. Each function's
+docstring lists them; :func:`options` too.
 
     >>> import normalflow as nf
     >>> mesh = nf.read_mesh("part.ply")
@@ -18,7 +19,6 @@ Long calls release the GIL; ``progress(stage, fraction)`` is called on the calli
 (KeyboardInterrupt), or an exception raised by the callback, stops the run at its next check and is raised.
 """
 import json as _json
-import re as _re
 
 from . import _normalflow as _nf
 from ._normalflow import (Cancelled, InvalidInput, IoError, Mesh, NumericalError, OutOfMemory, Volume,  # noqa: F401
@@ -47,40 +47,9 @@ def _mesh(mesh_or_vertices, faces=None):
     return Mesh(mesh_or_vertices, faces)
 
 
-def _flags(command, kwargs):
-    """Keyword arguments as the command line's flags: name=value is --name value; name=True is --name (or
-    nothing where --no-name exists); name=False is --no-name (or nothing where --name exists)."""
-    known = set(_nf.flag_names(command))
-    args = []
-    for key, value in kwargs.items():
-        flag = "--" + key.replace("_", "-")
-        no_flag = "--no-" + key.replace("_", "-")
-        if isinstance(value, bool):
-            if flag not in known and no_flag not in known:
-                raise TypeError(f"{command}() got an unexpected keyword argument '{key}'")
-            if value and flag in known:
-                args.append(flag)
-            elif not value and no_flag in known:
-                args.append(no_flag)
-            continue
-        if flag not in known:
-            raise TypeError(f"{command}() got an unexpected keyword argument '{key}'")
-        if value is None:
-            continue
-        args += [flag, repr(value) if isinstance(value, float) else str(value)]
-    return args
-
-
-def _call(fn, *args):
-    try:
-        return fn(*args)
-    except InvalidInput as e:  # the flags' names as the keyword arguments they came from
-        raise InvalidInput(_re.sub(r"--([a-z][a-z0-9-]*)", lambda m: m.group(1).replace("-", "_"), str(e))) from None
-
-
 def options(command="smooth"):
-    """The keyword arguments of smooth, remesh, voxelize or extract, with their help (the command line's)."""
-    return _nf.flag_help(command)
+    """The keyword arguments of smooth, remesh, voxelize or extract with their defaults, ranges and help."""
+    return _nf.keyword_help(command)
 
 
 def read_mesh(path):
@@ -115,9 +84,9 @@ def smooth(mesh, faces=None, *, progress=None, **options):
     Returns (Mesh or Volume, report dict)."""
     if isinstance(mesh, Volume):
         want_volume = bool(options.pop("volume", False))
-        out, report = _call(_nf.smooth_volume, mesh, _flags("smooth", options), progress, not want_volume)
+        out, report = _nf.smooth_volume(mesh, options, progress, not want_volume)
     else:
-        out, report = _call(_nf.smooth, _mesh(mesh, faces), _flags("smooth", options), progress)
+        out, report = _nf.smooth(_mesh(mesh, faces), options, progress)
     return out, _json.loads(report)
 
 
@@ -125,7 +94,7 @@ def remesh(mesh, faces=None, *, progress=None, **options):
     """A closed manifold re-meshing of any mesh through its volume (normalflow remesh): the extraction's vertices
     moved onto the input's creases and corners (sharpen=False keeps them on the grid), decimated with target_faces
     or max_error. Returns (Mesh, report dict)."""
-    out, report = _call(_nf.remesh, _mesh(mesh, faces), _flags("remesh", options), progress)
+    out, report = _nf.remesh(_mesh(mesh, faces), options, progress)
     return out, _json.loads(report)
 
 
@@ -133,14 +102,14 @@ def voxelize(mesh, faces=None, *, progress=None, **options):
     """Scan conversion (normalflow voxelize): a narrow-band signed distance Volume of the mesh.
 
     Returns (Volume, report dict)."""
-    volume, report = _call(_nf.voxelize, _mesh(mesh, faces), _flags("voxelize", options), progress)
+    volume, report = _nf.voxelize(_mesh(mesh, faces), options, progress)
     return volume, _json.loads(report)
 
 
 def extract(volume, *, progress=None, **options):
     """The zero level set of a Volume as a closed manifold Mesh (normalflow extract), decimated with target_faces
     or max_error. Returns (Mesh, report dict)."""
-    out, report = _call(_nf.extract, volume, _flags("extract", options), progress)
+    out, report = _nf.extract(volume, options, progress)
     return out, _json.loads(report)
 
 
@@ -179,3 +148,8 @@ def taubin(mesh, faces=None, *, iterations=None, lambda_=None, mu=None, fix_boun
                              d["lambda_"] if lambda_ is None else lambda_, d["mu"] if mu is None else mu,
                              fix_boundary, progress)
     return out, _json.loads(report)
+
+
+for _f in (smooth, remesh, voxelize, extract):  # each lists its keyword arguments, from the options table
+    _f.__doc__ += "\n\n    Keyword arguments (None: the default):\n\n" + "".join(
+        "    " + line + "\n" for line in _nf.keyword_help(_f.__name__).splitlines())

@@ -3,9 +3,9 @@
 //
 // - Meshes cross as normalflow::Mesh objects whose arrays are numpy views of the C++ vectors (no copy out;
 //   one copy in, to float32 / uint32).
-// - The pipeline's options are the command line's flags (apps/normalflow/pipeline_options.h): the package
-//   turns keyword arguments into flags, parsed here by the same CLI11 definitions, so the defaults, the
-//   checks and the result are the tool's.
+// - The pipeline's keyword arguments are the library's options table (pipeline/options.h), as the tool's
+//   flags are: the same names (with '_'), defaults, checks and results; an error says what is wrong in
+//   Python's terms (ValueError: mode 'bilaterl' is not one of bilateral, guided, ...).
 // - Long calls release the GIL; the progress callback and the Ctrl-C check run on the calling thread with it
 //   held: a pending KeyboardInterrupt (or an exception from the callback) stops the run at its next check
 //   and is raised from the call.
@@ -21,19 +21,18 @@
 #include <thread>
 #include <vector>
 
-#include "cli_support.h"
 #include "core/errors.h"
 #include "core/mesh.h"
 #include "core/mesh_report.h"
 #include "core/version.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
-#include "io/pipeline/report_json.h"
 #include "io/util/report_json.h"
 #include "metrics/compare.h"
 #include "metrics/compare_report.h"
 #include "metrics/noise.h"
-#include "pipeline_options.h"
+#include "pipeline/options.h"
+#include "pipeline/pipeline.h"
+#include "pipeline/report_json.h"
 #include "sdf/image_to_volume.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/repair.h"
@@ -74,12 +73,17 @@ std::vector<Record> records(const py::array_t<Scalar, py::array::c_style | py::a
 }
 
 Mesh make_mesh(const py::array_t<float, py::array::c_style | py::array::forcecast>& vertices,
-               const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& faces,
+               const py::array& face_array,
                const std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>>& normals,
                const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& colors,
                const std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>>& texcoords) {
     Mesh m;
     m.positions = records<float, 3, Vec3f>(vertices, "vertices");
+    const char kind = face_array.dtype().kind();
+    if (kind != 'i' && kind != 'u' && face_array.size() > 0)
+        throw InvalidInput("faces: expected integer vertex indices, got an array of " +
+                           std::string(py::str(face_array.dtype())));
+    const auto faces = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(face_array);
     if (faces.ndim() != 2 || faces.shape(1) != 3)
         throw InvalidInput("faces: expected an array of shape (m, 3) of vertex indices");
     const std::int64_t* f = faces.data();
@@ -174,58 +178,74 @@ auto released(PyProgress& progress, F&& f) {
     }
 }
 
-/// The options of one command from its flags (already in argv form, as the package builds them).
-struct Flags {
-    CLI::App app{"normalflow"};
-    PipelineOptions pipeline;
-};
-
-void parse(Flags& f, std::vector<std::string> args) {
-    std::reverse(args.begin(), args.end());  // CLI11 takes them last first
-    try {
-        f.app.parse(args);
-    } catch (const CLI::ParseError& e) {
-        throw InvalidInput(e.what());
-    }
-}
-
-/// The flag names the command takes (the package maps keyword arguments onto them).
-std::vector<std::string> flag_names(const Flags& f) {
-    std::vector<std::string> names;
-    for (const CLI::Option* o : f.app.get_options())
-        for (const std::string& n : o->get_lnames()) names.push_back("--" + n);
-    return names;
-}
-
-enum class Command { Smooth, Voxelize, Extract, Remesh };
-
-std::unique_ptr<Flags> flags_of(Command c) {
-    auto f = std::make_unique<Flags>();
-    CLI::App* app = &f->app;
-    if (c != Command::Extract) cli::add_grid_options(app, f->pipeline);
-    if (c == Command::Voxelize)
-        app->add_option("--band", f->pipeline.scan.half_width, "band half-width in voxels")
-            ->check(CLI::Range(1.0, 64.0));
-    if (c == Command::Smooth) cli::add_smooth_options(app, f->pipeline);
-    if (c == Command::Remesh) cli::add_remesh_options(app, f->pipeline);
-    if (c != Command::Voxelize) cli::add_decimation_options(app, f->pipeline);
-    return f;
-}
-
 Command command_of(const std::string& name) {
-    if (name == "smooth") return Command::Smooth;
-    if (name == "voxelize") return Command::Voxelize;
-    if (name == "extract") return Command::Extract;
-    if (name == "remesh") return Command::Remesh;
-    throw InvalidInput("no command " + name);
+    for (Command c : {Command::Smooth, Command::Remesh, Command::Voxelize, Command::Extract})
+        if (name == to_string(c)) return c;
+    throw InvalidInput("no command " + name + " (smooth, remesh, voxelize, extract)");
 }
 
-PipelineOptions options_of(Command c, const std::vector<std::string>& args) {
-    auto f = flags_of(c);
-    parse(*f, args);
-    PipelineOptions opt = f->pipeline;
-    opt.smooth.threads = opt.scan.threads;  // threads sets both stages, as in the tool
-    return opt;
+/// The keyword arguments of a call of command c as its options: each a row of the table (below the Library tier),
+/// its value checked as the tool checks a flag's. None leaves an option at its default.
+RunOptions run_options(Command c, const py::dict& keywords) {
+    RunOptions o = default_options(c);
+    for (const auto& [k, value] : keywords) {
+        const std::string key = py::str(k);
+        const OptionSpec* spec = nullptr;
+        for (const OptionSpec* s : user_options(c))
+            if (s->key() == key) spec = s;
+        if (!spec)
+            throw py::type_error(std::string(to_string(c)) + "() got an unexpected keyword argument '" + key + "'");
+        if (value.is_none()) continue;
+        const bool is_bool = py::isinstance<py::bool_>(value);
+        if (is_bool != (spec->kind == OptionKind::Switch))
+            throw py::type_error(key + ": expected " + (is_bool ? option_range(*spec) : "True or False") + ", got " +
+                                 std::string(py::str(py::type::of(value).attr("__name__"))));
+        std::string text;
+        if (is_bool)
+            text = value.cast<bool>() ? "true" : "false";
+        else if (py::isinstance<py::str>(value))
+            text = value.cast<std::string>();
+        else if (py::isinstance<py::int_>(value))
+            text = py::str(value);
+        else if (PyFloat_Check(value.ptr()) || py::hasattr(value, "__float__"))
+            text = py::repr(py::float_(py::reinterpret_borrow<py::object>(value)));
+        else
+            throw py::type_error(key + ": expected " + option_range(*spec) + ", got " +
+                                 std::string(py::str(py::type::of(value).attr("__name__"))));
+        try {
+            set_option(*spec, o, text);
+        } catch (const InvalidInput& e) {
+            throw InvalidInput(key + " " + e.what());
+        }
+    }
+    return o;
+}
+
+/// The keyword arguments of command c, one per line: name=default, what it takes, its help; by group.
+std::string keyword_help(Command c) {
+    const RunOptions defaults = default_options(c);
+    std::string out;
+    int group = -1;
+    for (const OptionSpec* s : user_options(c)) {
+        if (int(s->group) != group) {
+            group = int(s->group);
+            out += std::string(out.empty() ? "" : "\n") + to_string(s->group) + ":\n";
+        }
+        const std::string value = option_text(*s, defaults);
+        out += "    " + s->key() + "=" +
+               (s->kind == OptionKind::Switch ? (value == "true" ? "True" : "False")
+                : value.empty()               ? "None"
+                : s->kind == OptionKind::Choice || !s->zero.empty() || s->kind == OptionKind::Bytes ? "'" + value + "'"
+                                                                                                    : value) +
+               ": " + s->help + " (" + option_range(*s) + ")\n";
+    }
+    return out;
+}
+
+/// A report's "parameters" and "resolved", as the tool writes them.
+void set_parameters(Json& j, const RunOptions& run, Command c, const PipelineOptions& opt, const PipelineReport& r,
+                    double voxel_size, bool scan_converted) {
+    j.set("parameters", parameters_json(run, c)).set("resolved", resolved_json(opt, r, voxel_size, scan_converted));
 }
 
 py::tuple mesh_and_report(Mesh&& m, const Json& j) { return py::make_tuple(py::cast(std::move(m)), j.dump()); }
@@ -399,96 +419,110 @@ PYBIND11_MODULE(_normalflow, m) {
         py::arg("label") = py::none(), py::arg("negate") = false, py::arg("voxel_size") = 0.0);
 
     m.def(
-        "flag_names", [](const std::string& command) { return flag_names(*flags_of(command_of(command))); },
-        "The command-line flags of smooth, voxelize or extract");
-    m.def("flag_help", [](const std::string& command) { return flags_of(command_of(command))->app.help(); });
+        "keywords",
+        [](const std::string& command) {
+            std::vector<std::string> names;
+            for (const OptionSpec* s : user_options(command_of(command))) names.push_back(s->key());
+            return names;
+        },
+        py::arg("command"), "The keyword arguments of smooth, remesh, voxelize or extract");
+    m.def(
+        "keyword_help", [](const std::string& command) { return keyword_help(command_of(command)); },
+        py::arg("command"), "The keyword arguments of a command with their defaults, ranges and help, by group");
 
     m.def(
         "smooth",
-        [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
-            const PipelineOptions opt = options_of(Command::Smooth, args);
+        [](const Mesh& mesh, const py::dict& keywords, py::object callback) {
+            const RunOptions run = run_options(Command::Smooth, keywords);
+            const PipelineOptions opt = pipeline_options(run, Command::Smooth);
             PyProgress progress(std::move(callback));
             PipelineResult r = released(progress, [&] {
                 validate(opt);
                 return smooth_mesh(mesh, opt, &progress);
             });
             Json j = to_json(r.report);
-            j.set("mode", to_string(opt.smooth.mode))
-                .set("parameters", parameters_json(opt, r.report, r.report.scan.grid.voxel_size));
+            j.set("mode", to_string(opt.smooth.mode));
+            set_parameters(j, run, Command::Smooth, opt, r.report, r.report.scan.grid.voxel_size, true);
             j.set("version", version());
             return mesh_and_report(std::move(r.mesh), j);
         },
-        py::arg("mesh"), py::arg("args"), py::arg("progress"));
+        py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
 
     m.def(
         "smooth_volume",
-        [](const PyVolume& in, const std::vector<std::string>& args, py::object callback, bool want_mesh) {
-            PipelineOptions opt = options_of(Command::Smooth, args);
-            if (opt.scan.resolution != 0)
-                throw InvalidInput("resolution applies to a mesh input; a volume keeps its grid");
-            if (opt.scan.voxel_size != 0)
-                throw InvalidInput("voxel_size applies to a mesh input; give it to read_volume or image_to_volume");
-            if (in.info.spacing[0] > 0) cli::set_volume_length_scale(opt, in.info);  // as the tool: the file's spacing
+        [](const PyVolume& in, const py::dict& keywords, py::object callback, bool want_mesh) {
+            const RunOptions run = run_options(Command::Smooth, keywords);
+            PipelineOptions opt = pipeline_options(run, Command::Smooth);
+            if (volume_input(run).voxel_size != 0)
+                throw InvalidInput(
+                    "a Volume keeps its grid: resample it with read_volume's or image_to_volume's "
+                    "voxel_size");
+            if (in.info.spacing[0] > 0) set_volume_length_scale(opt, in.info);  // as the tool: the file's spacing
             PyProgress progress(std::move(callback));
             PyVolume out{in.volume, in.info};
             PipelineResult r =
                 released(progress, [&] { return smooth_volume_input(out.volume, opt, &progress, want_mesh); });
             Json j = to_json(r.report);
-            j.set("mode", to_string(opt.smooth.mode))
-                .set("parameters", parameters_json(opt, r.report, in.volume.grid.voxel_size));
+            j.set("mode", to_string(opt.smooth.mode));
+            set_parameters(j, run, Command::Smooth, opt, r.report, in.volume.grid.voxel_size, false);
             j.set("version", version());
             if (!want_mesh) return py::make_tuple(py::cast(std::move(out)), j.dump());
             return mesh_and_report(std::move(r.mesh), j);
         },
-        py::arg("volume"), py::arg("args"), py::arg("progress"), py::arg("want_mesh"));
+        py::arg("volume"), py::arg("keywords"), py::arg("progress"), py::arg("want_mesh"));
 
     m.def(
         "remesh",
-        [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
-            PipelineOptions opt = options_of(Command::Remesh, args);
-            opt.smoothing = false;
-            opt.connectivity = Connectivity::Remesh;
+        [](const Mesh& mesh, const py::dict& keywords, py::object callback) {
+            const RunOptions run = run_options(Command::Remesh, keywords);
+            const PipelineOptions opt = pipeline_options(run, Command::Remesh);
             PyProgress progress(std::move(callback));
             PipelineResult r = released(progress, [&] {
                 validate(opt);
                 return smooth_mesh(mesh, opt, &progress);
             });
             Json j = to_json(r.report);
-            j.set("parameters", parameters_json(opt, r.report, r.report.scan.grid.voxel_size))
-                .set("version", version());
+            set_parameters(j, run, Command::Remesh, opt, r.report, r.report.scan.grid.voxel_size, true);
+            j.set("version", version());
             return mesh_and_report(std::move(r.mesh), j);
         },
-        py::arg("mesh"), py::arg("args"), py::arg("progress"));
+        py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
 
     m.def(
         "voxelize",
-        [](const Mesh& mesh, const std::vector<std::string>& args, py::object callback) {
-            PipelineOptions opt = options_of(Command::Voxelize, args);
-            opt.smoothing = false;
+        [](const Mesh& mesh, const py::dict& keywords, py::object callback) {
+            const RunOptions run = run_options(Command::Voxelize, keywords);
+            const PipelineOptions opt = pipeline_options(run, Command::Voxelize);
             PyProgress progress(std::move(callback));
             PipelineReport r;
             PyVolume v{released(progress, [&] { return mesh_to_volume(mesh, opt, &r, &progress); }), {}};
             Json j = to_json(r);
+            set_parameters(j, run, Command::Voxelize, opt, r, v.volume.grid.voxel_size, true);
             j.set("version", version());
             return py::make_tuple(py::cast(std::move(v)), j.dump());
         },
-        py::arg("mesh"), py::arg("args"), py::arg("progress"));
+        py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
 
     m.def(
         "extract",
-        [](const PyVolume& v, const std::vector<std::string>& args, py::object callback) {
-            PipelineOptions opt = options_of(Command::Extract, args);
-            opt.smoothing = false;
+        [](const PyVolume& v, const py::dict& keywords, py::object callback) {
+            const RunOptions run = run_options(Command::Extract, keywords);
+            const PipelineOptions opt = pipeline_options(run, Command::Extract);
+            if (volume_input(run).voxel_size != 0)
+                throw InvalidInput(
+                    "a Volume keeps its grid: resample it with read_volume's or image_to_volume's "
+                    "voxel_size");
             PyProgress progress(std::move(callback));
             PipelineReport r;
             Mesh out = released(progress, [&] { return volume_to_mesh(v.volume, opt, &r, &progress); });
             Json j = Json::object();
             j.set("extract", to_json(r.extract));
             if (r.decimated) j.set("decimate", to_json(r.decimate));
+            set_parameters(j, run, Command::Extract, opt, r, v.volume.grid.voxel_size, false);
             j.set("warnings", Json::array(r.warnings)).set("version", version());
             return mesh_and_report(std::move(out), j);
         },
-        py::arg("volume"), py::arg("args"), py::arg("progress"));
+        py::arg("volume"), py::arg("keywords"), py::arg("progress"));
 
     m.def(
         "compare",

@@ -23,8 +23,8 @@
 #include "io/cgal/repair.h"
 #include "io/io.h"
 #include "io/meshopt/decimate.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
+#include "pipeline/pipeline.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/scan_convert.h"
 #include "sdf/sdf_test_meshes.h"
@@ -543,7 +543,7 @@ TEST(DecimateMesh, CliReportsTheDecimator) {
         const Mesh e = read_mesh(out);
         EXPECT_TRUE(mesh_report(e).closed && mesh_report(e).manifold);
     }
-    const std::string bad = cli + " smooth " + in + " " + out + " --target-faces 100 --decimator fast 2>/dev/null";
+    const std::string bad = cli + " cleanup " + in + " " + out + " --target-faces 100 --decimator fast 2>/dev/null";
     EXPECT_NE(std::system(bad.c_str()), 0);
 }
 #endif

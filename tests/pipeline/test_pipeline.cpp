@@ -1,6 +1,6 @@
-// Tests for io/pipeline: smooth_mesh (the whole mesh-to-mesh pipeline), its halves, the band rule,
+// Tests for pipeline/: smooth_mesh (the whole mesh-to-mesh pipeline), its halves, the band rule,
 // the memory check, option validation, and that the normalflow tool gives the library's result.
-#include "io/pipeline/pipeline.h"
+#include "pipeline/pipeline.h"
 
 #include <gtest/gtest.h>
 
@@ -16,7 +16,7 @@
 #include "core/mesh_report.h"
 #include "extract/surface_attributes.h"
 #include "io/io.h"
-#include "io/pipeline/report_json.h"
+#include "pipeline/report_json.h"
 #include "sdf/sdf_test_meshes.h"
 #include "support/attributed_mesh.h"
 #include "support/test_files.h"

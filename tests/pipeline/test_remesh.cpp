@@ -16,8 +16,8 @@
 #include "extract/decimate.h"
 #include "io/cgal/repair.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/compare.h"
+#include "pipeline/pipeline.h"
 #include "sdf/sdf_test_meshes.h"
 
 namespace normalflow {

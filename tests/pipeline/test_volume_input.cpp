@@ -19,8 +19,8 @@
 #include "extract/volume_sampler.h"
 #include "io/formats/nifti.h"
 #include "io/io.h"
-#include "io/pipeline/pipeline.h"
 #include "metrics/surface_distance.h"
+#include "pipeline/pipeline.h"
 #include "sdf/image_to_volume.h"
 #include "sdf/sdf_test_meshes.h"
 #include "support/test_files.h"
@@ -315,7 +315,7 @@ TEST(VolumeInput, CliReadsAMaskAndRefusesBadVolumeInput) {
         EXPECT_EQ(test::slurp(mask), before);
     }
     refused("smooth " + mask + " " + out + " --iso 0.5 --label 1", "either an iso value or a label");
-    refused("smooth " + mask + " " + out + " --resolution 64", "--resolution applies to a mesh input");
+    refused("smooth " + mask + " " + out + " --resolution 64", "resolution and shell apply to a mesh input");
     refused("smooth " + mask + " " + out + " --label 7", "holds no surface");
     refused("smooth " + dir / "sphere.ply" + " " + out + " --iso 1", "apply to a volume input");
     const std::string garbage = dir / "garbage.nii.gz";

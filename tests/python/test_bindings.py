@@ -1,6 +1,7 @@
 """The Python module against the command-line tool of the same build, on a real pair and on analytic cases."""
 import _thread
 import json
+import pydoc
 import subprocess
 import threading
 import time
@@ -9,6 +10,7 @@ import numpy as np
 import pytest
 
 import normalflow as nf
+from normalflow import _normalflow
 from conftest import icosphere
 
 
@@ -173,13 +175,31 @@ def test_bad_input_is_one_clear_error():
         nf.Mesh(v, np.array([[0, 1, 99]]))
     with pytest.raises(ValueError, match=r"vertices: expected an array of shape \(n, 3\)"):
         nf.Mesh(v[:, :2], f)
-    with pytest.raises(ValueError, match="resolution: Value 3 not in range"):
+    with pytest.raises(ValueError, match=r"^resolution '3' is not an integer in \[8, 8192\], or auto$"):
         nf.smooth(v, f, resolution=3)
-    with pytest.raises(ValueError, match="mode"):
-        nf.smooth(v, f, mode="nonsense")
+    with pytest.raises(ValueError, match="^mode 'bilaterl' is not one of bilateral, guided, tv, anisotropic"):
+        nf.smooth(v, f, mode="bilaterl")
+    with pytest.raises(TypeError, match="repair: expected True or False, got str"):
+        nf.smooth(v, f, repair="no")
+    with pytest.raises(TypeError, match="iterations: expected an integer in .*, got bool"):
+        nf.smooth(v, f, iterations=True)
+    with pytest.raises(ValueError, match="faces: expected integer vertex indices, got an array of float64"):
+        nf.Mesh(v, f.astype(np.float64))
     with pytest.raises(TypeError, match="unexpected keyword argument 'resolutoin'"):
         nf.smooth(v, f, resolutoin=64)
     with pytest.raises(OSError, match="no_such_file.ply"):
         nf.read_mesh("no_such_file.ply")
     with pytest.raises(ValueError, match="binary mask"):
         nf.image_to_volume(np.random.default_rng(0).random((8, 8, 8)))
+
+
+def test_help_names_every_keyword_with_its_default():
+    for name in ("smooth", "remesh", "voxelize", "extract"):
+        fn = getattr(nf, name)
+        doc = pydoc.render_doc(fn)
+        keywords = _normalflow.keywords(name)
+        assert keywords, name
+        for k in keywords:
+            assert f"{k}=" in doc, f"help(normalflow.{name}) does not name {k}"
+    assert "mode='bilateral'" in nf.smooth.__doc__ and "sharpen=True" in nf.remesh.__doc__
+    assert "decimator" not in _normalflow.keywords("smooth")  # the Library tier is C++ only

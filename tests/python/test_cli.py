@@ -1,5 +1,7 @@
 """The tool's --config files and the parameters its --json records."""
 import json
+import pathlib
+import re
 import subprocess
 
 import pytest
@@ -35,7 +37,7 @@ def test_a_config_file_is_its_flags_and_the_command_line_wins(cli, part, tmp_pat
 
 @pytest.mark.parametrize("text, message", [
     ("resolutoin = 40\n", "resolutoin: not a flag of smooth"),
-    ("resolution = 3\n", "resolution: --resolution: Value 3 not in range"),
+    ("resolution = 3\n", "resolution: --resolution: '3' is not an integer in [8, 8192], or auto"),
     ('mode = "nonsense"\n', "mode:"),
     ("[voxelize]\nband = 4\n", "only the [smooth] section applies"),
 ])
@@ -53,15 +55,33 @@ def test_json_records_every_parameter_and_the_version(cli, part, tmp_path):
     rc, r, _ = smooth(cli, part, tmp_path / "o.ply", "--resolution", 40, "--sigma-range", 0.5, "--iterations", 3,
                       "--target-faces", 3000, "--json")
     assert rc == 0 and r["version"] == nf.__version__
-    p = r["parameters"]
+    p, resolved = r["parameters"], r["resolved"]
     assert p["resolution"] == 40 and p["sigma_range"] == 0.5 and p["iterations"] == 3 and p["target_faces"] == 3000
-    assert p["mode"] == "bilateral" and p["normal_steps"] > 0 and p["refit_steps"] > 0 and p["length_scale"] > 0
-    # every flag that sets an option of the pipeline has its key (--no-x as x)
-    for flag in _normalflow.flag_names("smooth"):
-        if flag == "--help":
-            continue
-        key = flag[2:].removeprefix("no-").replace("-", "_")
-        assert key in p, f"{flag} is not recorded in --json's parameters"
+    assert p["mode"] == "bilateral" and p["normal_steps"] == 0 and p["length_scale"] == 0  # as given: automatic
+    assert resolved["resolution"] == 40 and resolved["iterations"] == 3
+    assert resolved["normal_steps"] > 0 and resolved["refit_steps"] > 0 and resolved["length_scale"] > 0
+    # every option of the table that smooth takes has its key, and nothing else is there
+    assert sorted(k for k in p if k != "library") == sorted(_normalflow.keywords("smooth"))
+    assert "distance" in p["library"] and "decimator" in p["library"]
+
+
+def toml(parameters):
+    """A report's parameters as a config file (the Library tier and unset values left out)."""
+    def value(v):
+        return ("true" if v else "false") if isinstance(v, bool) else json.dumps(v)
+    return "".join(f"{k} = {value(v)}\n" for k, v in parameters.items() if k != "library" and v is not None)
+
+
+def test_a_reports_parameters_repeat_the_run_as_a_config_file(cli, part, tmp_path):
+    rc, a, _ = smooth(cli, part, tmp_path / "a.ply", "--resolution", 48, "--sigma-range", 0.3, "--no-repair",
+                      "--json")
+    assert rc == 0
+    config = tmp_path / "replay.toml"
+    config.write_text(toml(a["parameters"]))
+    rc, b, err = smooth(cli, part, tmp_path / "b.ply", "--config", config, "--json")
+    assert rc == 0, err
+    assert b["parameters"] == a["parameters"] and b["resolved"] == a["resolved"]
+    assert (tmp_path / "a.ply").read_bytes() == (tmp_path / "b.ply").read_bytes()
 
 
 def test_remesh_keeps_creases_and_python_gives_the_tools_result(cli, data, tmp_path):
@@ -80,3 +100,26 @@ def test_remesh_keeps_creases_and_python_gives_the_tools_result(cli, data, tmp_p
     assert sharp_angle < 0.6 * plain_angle, (sharp_angle, plain_angle)
     info = mesh.report()
     assert info["closed"] and info["manifold"]
+
+
+def tool_help(cli):
+    """Every subcommand's --help-all, by name."""
+    top = subprocess.run([cli, "--help"], capture_output=True, text=True).stdout
+    names = re.findall(r"^  ([a-z]+)  ", top.split("Subcommands:")[1], re.M)
+    return {"": top, **{n: subprocess.run([cli, n, "--help-all"], capture_output=True, text=True).stdout
+                        for n in names}}
+
+
+def test_the_readme_names_only_the_tools_flags_and_their_defaults(cli):
+    readme = (pathlib.Path(__file__).resolve().parents[2] / "README.md").read_text()
+    helps = tool_help(cli)
+    flags = set().union(*(re.findall(r"--[a-z][a-z0-9-]*", h) for h in helps.values()))
+    others = {"--cflags", "--libs", "--static", "--all", "--check"}  # pkg-config's and scripts/format's
+    assert set(re.findall(r"--[a-z][a-z0-9-]*", readme)) - flags - others == set()
+    # a synopsis' [--flag N] is the flag's default in the help of some command
+    defaults = {}
+    for h in helps.values():
+        for flag, value in re.findall(r"^\s+(--[a-z][a-z0-9-]*) [^=\n]*=([^ \n]+)", h, re.M):
+            defaults.setdefault(flag, set()).add(value)
+    for flag, value in re.findall(r"\[(--[a-z][a-z0-9-]*) ([0-9.-]+)\]", readme):
+        assert any(float(value) == float(d) for d in defaults.get(flag, ())), f"README: [{flag} {value}]"

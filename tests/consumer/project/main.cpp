@@ -3,7 +3,7 @@
 #include <normalflow/core/mesh_report.h>
 #include <normalflow/core/version.h>
 #include <normalflow/io/io.h>
-#include <normalflow/io/pipeline/pipeline.h>
+#include <normalflow/pipeline/pipeline.h>
 
 #include <cstdio>
 #include <string>

@@ -1,9 +1,13 @@
-#include "io/pipeline/system_memory.h"
+#include "pipeline/system_memory.h"
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #if defined(__unix__) || defined(__APPLE__)
 #include <sys/resource.h>
 #endif
+
+#include "core/errors.h"
 
 namespace normalflow {
 
@@ -37,6 +41,27 @@ std::string format_bytes(double bytes) {
     else
         std::snprintf(buf, sizeof buf, "%.0f kB", bytes / 1e3);
     return buf;
+}
+
+std::size_t parse_bytes(const std::string& text) {
+    char* end = nullptr;
+    const double value = std::strtod(text.c_str(), &end);
+    std::string rest(end ? end : "");
+    if (!rest.empty() && (rest.back() == 'B' || rest.back() == 'b')) rest.pop_back();
+    double unit = 0;  // 0: not a known suffix
+    if (rest.empty())
+        unit = 1;
+    else if (rest == "K" || rest == "k")
+        unit = 1024.0;
+    else if (rest == "M" || rest == "m")
+        unit = 1024.0 * 1024;
+    else if (rest == "G" || rest == "g")
+        unit = 1024.0 * 1024 * 1024;
+    else if (rest == "T" || rest == "t")
+        unit = 1024.0 * 1024 * 1024 * 1024;
+    if (end == text.c_str() || unit == 0 || !(value > 0) || !std::isfinite(value))
+        throw InvalidInput("'" + text + "' is not a size (examples: 4G, 512M, 100000)");
+    return static_cast<std::size_t>(value * unit);
 }
 
 }  // namespace normalflow

@@ -16,4 +16,8 @@ std::size_t peak_memory_bytes();
 /// "1.23 GB"-style rendering of a byte count.
 std::string format_bytes(double bytes);
 
+/// "4G", "512M", "1.5g", "100000": a byte count (K, M, G, T are powers of 1024; a trailing B is allowed).
+/// \throw InvalidInput "'TEXT' is not a size (examples: 4G, 512M, 100000)".
+std::size_t parse_bytes(const std::string& text);
+
 }  // namespace normalflow

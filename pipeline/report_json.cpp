@@ -1,4 +1,4 @@
-#include "io/pipeline/report_json.h"
+#include "pipeline/report_json.h"
 
 #include <algorithm>
 #include <vector>

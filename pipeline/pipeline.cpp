@@ -1,4 +1,4 @@
-#include "io/pipeline/pipeline.h"
+#include "pipeline/pipeline.h"
 
 #include <algorithm>
 #include <cmath>
@@ -21,9 +21,6 @@
 #include "io/cgal/aabb_distance.h"
 #include "io/cgal/repair.h"
 #endif
-#ifdef NORMALFLOW_HAS_MESHOPT
-#include "io/meshopt/decimate.h"
-#endif
 
 namespace normalflow {
 
@@ -42,6 +39,14 @@ std::string str(T v) {
     } else {
         return std::to_string(v);
     }
+}
+
+long long self_intersection_pairs([[maybe_unused]] const Mesh& m, [[maybe_unused]] bool weld = false) {
+#ifdef NORMALFLOW_HAS_CGAL
+    return static_cast<long long>(weld ? count_self_intersections(m) : count_self_intersections_as_written(m));
+#else
+    return -1;
+#endif
 }
 
 void append(std::vector<std::string>& to, const std::vector<std::string>& from) {
@@ -406,7 +411,7 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
     } else if (o.target_faces > 0 || o.max_error > 0) {
         detail::begin(progress, "decimate");
         // Hermite data: the field's normal at each vertex, so that the quadrics see the surface the
-        // volume holds rather than the extraction's one-voxel bevels at creases (benchmarks/README.md,
+        // volume holds rather than the extraction's one-voxel bevels at creases (docs/history/benchmarks-2026.md,
         // "Sharp extraction"); a sharpened surface's own faces lie on the input's planes already.
         set_volume_normals(m, v);
         r.decimate = decimate_mesh(m, {.target_faces = o.target_faces,
@@ -422,187 +427,6 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
     r.seconds.total += r.seconds.extract + r.seconds.decimate;
     r.peak_memory_bytes = peak_memory_bytes();
     return m;
-}
-
-const char* to_string(Decimator d) {
-    switch (d) {
-        case Decimator::Auto: return "auto";
-        case Decimator::Quadric: return "quadric";
-        case Decimator::Meshoptimizer: return "meshoptimizer";
-        case Decimator::Cgal: return "cgal";
-    }
-    return "?";
-}
-
-namespace {
-
-/// The first guarantee of `before` that `after` breaks ("" when none): closed, manifold, and
-/// (self_intersections >= 0) free of self-intersections.
-std::string broken_guarantee(const MeshReport& before, const MeshReport& after, long long self_intersections) {
-    if (before.closed && !after.closed)
-        return "not closed (" + std::to_string(after.boundary_edges) + " boundary edges)";
-    if (before.manifold && !after.manifold)
-        return "not manifold (" + std::to_string(after.non_manifold_edges) + " non-manifold edges, " +
-               std::to_string(after.non_manifold_vertices) + " non-manifold vertices)";
-    if (self_intersections > 0) return std::to_string(self_intersections) + " pairs of self-intersecting faces";
-    return "";
-}
-
-long long self_intersection_pairs([[maybe_unused]] const Mesh& m, [[maybe_unused]] bool weld = false) {
-#ifdef NORMALFLOW_HAS_CGAL
-    return static_cast<long long>(weld ? count_self_intersections(m) : count_self_intersections_as_written(m));
-#else
-    return -1;
-#endif
-}
-
-}  // namespace
-
-SampledDistance decimation_distance(const Mesh& result, const Mesh& input) {
-    // From the input (dense: an extraction has vertices a fraction of a voxel apart) its vertices
-    // suffice, from the result 3 more points per face.
-    SampledDistance d;
-    d.a_to_b = sampled_max_distance(result, input, 3);
-    d.b_to_a = sampled_max_distance(input, result, 0);
-    d.hausdorff = std::max(d.a_to_b, d.b_to_a);
-    return d;
-}
-
-DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator decimator) {
-    if (target_faces < 4) throw InvalidInput("decimate_mesh: target_faces must be >= 4, got " + str(target_faces));
-    return decimate_mesh(m, {.target_faces = target_faces, .decimator = decimator});
-}
-
-DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
-    Stopwatch clock;
-    const std::size_t target_faces = options.target_faces;
-    const Decimator decimator = options.decimator;
-    check_mesh(m, "decimate_mesh");
-    if (m.triangles.empty()) throw InvalidInput("decimate_mesh: empty mesh (no triangles)");
-    if (!(options.max_error >= 0) || !std::isfinite(options.max_error))
-        throw InvalidInput("decimate_mesh: max_error must be finite and >= 0, got " + str(options.max_error));
-    if (target_faces < 4 && !(target_faces == 0 && options.max_error > 0))
-        throw InvalidInput("decimate_mesh: target_faces must be >= 4 (or 0 with max_error > 0), got " +
-                           str(target_faces));
-    if (options.max_error > 0 && decimator == Decimator::Meshoptimizer)
-        throw InvalidInput("decimate_mesh: decimator meshoptimizer decimates to a face count only, not to max_error");
-#ifndef NORMALFLOW_HAS_MESHOPT
-    if (decimator == Decimator::Meshoptimizer)
-        throw InvalidInput("decimate_mesh: decimator meshoptimizer: needs a build with meshoptimizer");
-#endif
-#ifndef NORMALFLOW_HAS_CGAL
-    if (decimator == Decimator::Cgal)
-        throw InvalidInput("decimate_mesh: decimator cgal: CGAL's edge collapse needs a build with CGAL");
-#endif
-    DecimationReport rep;
-    rep.faces_before = m.triangles.size();
-    rep.vertices_before = m.positions.size();
-    const MeshReport input = options.input_report ? *options.input_report : mesh_report(m);
-    Mesh result;
-    bool done = false;
-    if (decimator == Decimator::Auto || decimator == Decimator::Quadric) {
-        Stopwatch t;
-        result = m;
-        decimate_mesh_qem(result, {.target_faces = target_faces,
-                                   .max_error = options.max_error,
-                                   .tangent_planes = options.tangent_planes && m.normals.size() == m.positions.size(),
-                                   .max_normal_deviation_deg =
-                                       m.normals.size() == m.positions.size() ? options.max_normal_deviation_deg : 0});
-        rep.seconds_decimate += t.lap();
-        rep.decimator = "quadric";
-        rep.self_intersections = self_intersection_pairs(result);
-        MeshReport after = mesh_report(result);
-#ifdef NORMALFLOW_HAS_CGAL
-        // A few pairs of faces decimated through each other (deep folds, thin parts): CGAL's local
-        // repair first (cleanup_mesh's self-intersection step alone), kept only if it clears them all
-        // and keeps the mesh as closed and manifold as it was.
-        if ((decimator == Decimator::Auto || options.local_repair) && rep.self_intersections > 0 &&
-            broken_guarantee(input, after, -1).empty()) {
-            Mesh repaired = result;
-            cgal::CleanupOptions co;
-            co.remove_degenerate = false;
-            co.orient_outward = false;
-            const cgal::CleanupReport cr = cgal::cleanup_mesh(repaired, co);
-            const MeshReport ra = mesh_report(repaired);
-            if (cr.self_intersections == 0 && broken_guarantee(input, ra, 0).empty()) {
-                rep.repaired_self_intersections = std::size_t(rep.self_intersections);
-                rep.self_intersections = 0;
-                result = std::move(repaired);
-                after = ra;
-            }
-            rep.seconds_decimate += t.lap();
-        }
-#endif
-        const std::string why = broken_guarantee(input, after, rep.self_intersections);
-        done = why.empty() || decimator == Decimator::Quadric;
-#ifndef NORMALFLOW_HAS_CGAL
-        done = true;  // nothing to fall back to: the result is reported as it is
-#endif
-        if (!done)
-            rep.fallback =
-                "the quadric decimation's result was " + why + "; decimated with CGAL's edge collapse instead";
-    }
-#ifdef NORMALFLOW_HAS_MESHOPT
-    if (decimator == Decimator::Meshoptimizer) {
-        Stopwatch t;
-        result = m;
-        meshopt::decimate_mesh(result, {.target_faces = target_faces});
-        rep.seconds_decimate += t.lap();
-        rep.decimator = "meshoptimizer";
-        rep.self_intersections = self_intersection_pairs(result);
-        done = true;
-    }
-#endif
-#ifdef NORMALFLOW_HAS_CGAL
-    if (!done) {
-        Stopwatch t;
-        Mesh other = m;
-        cgal::CleanupOptions co;
-        if (target_faces > 0) {
-            co.reduction = cgal::CleanupReduction::FaceCount;
-            co.target_faces = target_faces;
-        } else {
-            co.reduction = cgal::CleanupReduction::ErrorBound;
-            co.max_error = options.max_error;
-        }
-        const cgal::CleanupReport cr = cgal::cleanup_mesh(other, co);
-        rep.seconds_decimate += t.lap();
-        const long long other_pairs = static_cast<long long>(cr.self_intersections);
-        // CGAL's result, unless it breaks more than the quadric one did (at extreme ratios on folded
-        // surfaces both can leave intersecting pairs): then the quadric one, with a warning below.
-        const bool cgal_better =
-            broken_guarantee(input, mesh_report(other), -1).empty() &&
-            (other_pairs < rep.self_intersections || !broken_guarantee(input, mesh_report(result), -1).empty());
-        if (cgal_better) {
-            result = std::move(other);
-            rep.decimator = "cgal";
-            rep.self_intersections = other_pairs;
-            append(rep.warnings, cr.warnings);
-            rep.warnings.push_back(rep.fallback);
-        } else {
-            rep.fallback = "CGAL's edge collapse left " + std::to_string(other_pairs) +
-                           " pairs of self-intersecting faces; the quadric decimation's result is kept";
-        }
-    }
-#endif
-    const MeshReport out = mesh_report(result);
-    rep.closed = out.closed;
-    rep.manifold = out.manifold;
-    if (rep.decimator != "cgal") {  // CGAL's cleanup reported its own problems
-        const std::string why = broken_guarantee(input, out, rep.self_intersections);
-        if (!why.empty()) rep.warnings.push_back("decimated result is " + why);
-    }
-    if (options.measure_distance) {
-        const SampledDistance d = decimation_distance(result, m);
-        rep.result_to_input = d.a_to_b;
-        rep.input_to_result = d.b_to_a;
-        rep.hausdorff = d.hausdorff;
-    }
-    rep.faces_after = result.triangles.size();
-    rep.vertices_after = result.positions.size();
-    m = std::move(result);
-    rep.seconds = clock.lap();
-    return rep;
 }
 
 const char* to_string(Connectivity c) {

@@ -8,9 +8,9 @@
 #include "extract/extract_surface.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
-#include "io/pipeline/pipeline.h"
 #include "io/util/json.h"
 #include "normals/smooth.h"
+#include "pipeline/pipeline.h"
 #include "sdf/scan_convert.h"
 
 namespace normalflow {

@@ -20,9 +20,9 @@
 #include "extract/trim_to_footprint.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
-#include "io/pipeline/system_memory.h"
 #include "metrics/surface_distance.h"
 #include "normals/smooth.h"
+#include "pipeline/system_memory.h"
 #include "sdf/scan_convert.h"
 
 namespace normalflow {
@@ -67,14 +67,14 @@ const char* to_string(Connectivity c);
 
 /// Connectivity::Auto keeps a closed input's mesh when, fitted to the processed volume, its faces
 /// are within this mean angle (degrees, FitReport::mean_face_angle_deg) of the volume's normals, and
-/// re-meshes it otherwise. Chosen on the study's 12 closed pairs (benchmarks/README.md, "The user's mesh
+/// re-meshes it otherwise. Chosen on the study's 12 closed pairs (docs/history/benchmarks-2026.md, "The user's mesh
 /// handed back"): every pair kept better than re-meshed fitted within 2.14°, every pair re-meshed better
 /// (heavy noise that tangled the triangles: fandisk_n0.7, fandisk_n6, trimstar_n0.5, vaselion) beyond
 /// 2.86°; the one exception, twelve_imp0.5 (1.66°), is kept at a cost of 0.18°.
 inline constexpr double kAutoKeepFitAngleDeg = 2.5;
 
 /// PipelineOptions::sharpen: no vertex moves farther than this many voxels (the bevel marching tetrahedra cuts is
-/// about one voxel wide; two let vertices cross and meet: fandisk at 256, benchmarks/README.md "Sharp re-meshing").
+/// about one voxel wide; two let vertices cross and meet: fandisk at 256, docs/history/benchmarks-2026.md "Sharp re-meshing").
 inline constexpr double kSharpenMaxMoveVoxels = 1.0;
 
 /// A re-meshed result is decimated by default (PipelineOptions::full_density false) while each collapse stays
@@ -82,7 +82,7 @@ inline constexpr double kSharpenMaxMoveVoxels = 1.0;
 /// per voxel, far more than its shape needs. How many faces stay is decided by the normal bound below: on the
 /// study's four re-meshed pairs 0.05 and 0.1 voxel keep the same count within 1.5%, so the distance is bounded as
 /// tightly as costs no faces; 0.1 moved the mean normal angle by up to +0.14° from the full-density result, 0.05 by
-/// at most +0.08° (benchmarks/README.md, "Compact output by default").
+/// at most +0.08° (docs/history/benchmarks-2026.md, "Compact output by default").
 inline constexpr double kCompactErrorVoxels = 0.05;
 /// ... and while no face turns more than this (degrees) from the surface's normals at its corners: the distance
 /// alone lets faces grow on gentle bends until their shading is visibly faceted.
@@ -100,7 +100,7 @@ enum class Decimator {
     Quadric,        ///< normalflow's own quadric edge collapse (lib/extract decimate_mesh_qem) only: its
                     ///< result is checked and reported, never replaced
     Meshoptimizer,  ///< meshoptimizer's simplifier (io/meshopt; fast, but version 0.18 leaves extracted
-                    ///< surfaces non-manifold and self-intersecting: benchmarks/README.md, "Decimation")
+                    ///< surfaces non-manifold and self-intersecting: docs/history/benchmarks-2026.md, "Decimation")
     Cgal,           ///< CGAL's edge collapse (io/cgal cleanup_mesh, FaceCount): the decimator before version 0.2
 };
 
@@ -143,7 +143,7 @@ struct PipelineOptions {
     bool smoothing = true;
     /// The engine's options (mode, iterations, ...); used when smoothing. Its length_scale, when
     /// 0, is set from length_scale below. The pipeline's default mode is Bilateral (the engine's
-    /// own default, Anisotropic, is the paper's): benchmarks/README.md, "Normal filters beyond
+    /// own default, Anisotropic, is the paper's): docs/history/benchmarks-2026.md, "Normal filters beyond
     /// the paper", has the study that chose it.
     SmoothOptions smooth{.mode = SmoothMode::Bilateral};
     /// World units, >= 0: the model's length unit for the engine (SmoothOptions::length_scale);
@@ -181,7 +181,7 @@ struct PipelineOptions {
     /// the input's creases and corners (sharpen_mesh, the input as the reference) before any decimation, which then
     /// keeps them (face planes, not the field's rounded normals). Faces a move made intersect get their vertices
     /// back (builds with CGAL). Refused with smoothing: the smoothed surface's creases are its own, and sharpening
-    /// towards its volume was measured worse (benchmarks/README.md, "Sharp re-meshing").
+    /// towards its volume was measured worse (docs/history/benchmarks-2026.md, "Sharp re-meshing").
     bool sharpen = false;
     /// Refuse, before anything big is allocated, a run estimated to need more than this many
     /// bytes; 0: the memory the system has available now (MemAvailable).
@@ -294,7 +294,7 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options, PipelineRep
 /// The model length unit smooth_volume_input gives the engine for a volume that did not come from a mesh (a
 /// volume file), in voxels of its grid: the scale of a scan's noise and of a binary mask's staircase. The
 /// command line counts it in the file's coarsest spacing instead (the same for isotropic files), as the
-/// staircase of an anisotropic file is as coarse as that. Chosen on the ball mask: benchmarks/README.md,
+/// staircase of an anisotropic file is as coarse as that. Chosen on the ball mask: docs/history/benchmarks-2026.md,
 /// "Volumes in and out".
 inline constexpr double kVolumeLengthScaleVoxels = 1.0;
 
@@ -355,7 +355,7 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options);
 /// instead, with the reason in DecimationReport::fallback. Attributes: the quadric and meshoptimizer decimators keep the surviving
 /// vertices' normals, colours and texture coordinates; CGAL's result has none.
 /// \throw InvalidInput for an empty or invalid mesh, target_faces < 4, or a decimator this build lacks.
-/// Cost: fandisk extracted at resolution 256 (1.1 M faces) to 20,000 faces: benchmarks/README.md,
+/// Cost: fandisk extracted at resolution 256 (1.1 M faces) to 20,000 faces: docs/history/benchmarks-2026.md,
 /// "Decimation" (nf_bench_decimate).
 DecimationReport decimate_mesh(Mesh& m, std::size_t target_faces, Decimator decimator = Decimator::Auto);
 
