@@ -529,17 +529,17 @@ Json option_json(const OptionSpec& s, const RunOptions& o) {
     return Json();
 }
 
-void check_options(const RunOptions& o, Command c, const char* who) {
+void check_options(const RunOptions& o, const char* who) {
     for (const OptionSpec& s : option_table()) {
-        if (!s.takes(c)) continue;
         const bool numeric = s.kind == OptionKind::Int || s.kind == OptionKind::Count || s.kind == OptionKind::Real ||
                              s.kind == OptionKind::Bytes;
         if (numeric && !in_range(s, number_of(s, o)))
-            throw InvalidInput(std::string(who) + ": " + s.key() + " = " + shortest(number_of(s, o), s.single) +
-                               ": expected " + option_range(s));
+            throw InvalidInput(std::string(who) + ": " + s.key() + " (" + s.field +
+                               ") = " + shortest(number_of(s, o), s.single) + ": expected " + option_range(s));
         if (s.kind == OptionKind::OptionalReal) {
             const auto& v = field<std::optional<double>>(s, o);
-            if (v && !std::isfinite(*v)) throw InvalidInput(std::string(who) + ": " + s.key() + ": not finite");
+            if (v && !std::isfinite(*v))
+                throw InvalidInput(std::string(who) + ": " + s.key() + " (" + s.field + "): not finite");
         }
     }
 }

@@ -142,10 +142,10 @@ Json option_json(const OptionSpec& spec, const RunOptions& o);
 /// What values spec takes, for help and errors: "bilateral|guided|...", "> 0", "[8, 8192], or 0 (auto)".
 std::string option_range(const OptionSpec& spec);
 
-/// Checks every option of the table that c takes against its range, naming the option (`name = value: expected
-/// RANGE`): a library caller's values get the checks the command line's get.
-/// \throw InvalidInput "who: NAME = VALUE: expected RANGE".
-void check_options(const RunOptions& o, Command c, const char* who);
+/// Checks every option of the table against its range (all tiers, whatever the command), naming the option and its
+/// field: a library caller's values get the checks the command line's get (validate(PipelineOptions) runs it).
+/// \throw InvalidInput "who: NAME (FIELD) = VALUE: expected RANGE".
+void check_options(const RunOptions& o, const char* who);
 
 /// The `parameters` of a --json report: every option c takes, user tiers first, as given (an automatic 0 stays 0),
 /// so that the object is a config file that repeats the run; the Library tier's under "library".

@@ -15,6 +15,7 @@
 #include "extract/decimate.h"
 #include "extract/surface_attributes.h"
 #include "metrics/surface_distance.h"
+#include "pipeline/options.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/memory_estimate.h"
 #ifdef NORMALFLOW_HAS_CGAL
@@ -64,38 +65,22 @@ const char* to_string(DistanceQuery q) {
 }
 
 void validate(const PipelineOptions& o) {
-    const ScanConvertOptions& s = o.scan;
+    RunOptions run;
+    run.pipeline = o;
+    check_options(run, "smooth_mesh");  // each option's range, from the options table
+    if (o.smoothing)
+        validate_smooth_options(o.smooth, "smooth_mesh", "smooth.");  // the engine's fields the table has not
+    // the rules between options
     if (o.sharpen && o.smoothing) bad_option("sharpen", "true", "false with smoothing (it sharpens a re-meshing)");
     if (o.sharpen && o.connectivity == Connectivity::Keep)
         bad_option("sharpen", "true", "false with connectivity keep (it sharpens a re-meshing)");
-    if (!(s.voxel_size >= 0) || !std::isfinite(s.voxel_size)) bad_option("scan.voxel_size", str(s.voxel_size), ">= 0");
-    if (s.voxel_size == 0 && s.resolution < 0)
-        bad_option("scan.resolution", str(s.resolution), ">= 1, or 0 (automatic)");
-    if (!(s.half_width >= 1) || !std::isfinite(s.half_width)) bad_option("scan.half_width", str(s.half_width), ">= 1");
-    if (!(s.shell_thickness >= 0) || !std::isfinite(s.shell_thickness))
-        bad_option("scan.shell_thickness", str(s.shell_thickness), ">= 0");
-    if (s.threads < 0) bad_option("scan.threads", str(s.threads), ">= 0");
-    if (o.smoothing) {
-        validate_smooth_options(o.smooth, "smooth_mesh", "smooth.");  // the engine's own checks, before any work
-        if (!(o.length_scale >= 0) || !std::isfinite(o.length_scale))
-            bad_option("length_scale", str(o.length_scale), ">= 0");
-    }
-    if (!std::isfinite(o.extract.iso)) bad_option("extract.iso", str(o.extract.iso), "a finite value");
-    if (o.connectivity == Connectivity::Keep && o.target_faces > 0)
-        throw InvalidInput(
-            "smooth_mesh: target_faces (--target-faces) re-meshes: it needs connectivity remesh or auto");
-    if (!(o.max_error >= 0) || !std::isfinite(o.max_error)) bad_option("max_error", str(o.max_error), ">= 0");
-    if (o.connectivity == Connectivity::Keep && o.max_error > 0)
-        throw InvalidInput("smooth_mesh: max_error (--max-error) re-meshes: it needs connectivity remesh or auto");
+    for (const auto& [given, name] :
+         {std::pair{o.target_faces > 0, "target_faces"}, {o.max_error > 0, "max_error"}, {o.closed, "closed"}})
+        if (given && o.connectivity == Connectivity::Keep)
+            throw InvalidInput(std::string("smooth_mesh: ") + name +
+                               " re-meshes: it needs connectivity remesh or auto");
     if (o.max_error > 0 && o.decimator == Decimator::Meshoptimizer)
-        throw InvalidInput("smooth_mesh: max_error (--max-error): meshoptimizer decimates to a face count only");
-    if (o.connectivity == Connectivity::Keep && o.closed)
-        throw InvalidInput("smooth_mesh: closed (--closed) re-meshes: it needs connectivity remesh or auto");
-    if (o.fit.projection_steps < 0) bad_option("fit.projection_steps", str(o.fit.projection_steps), ">= 0");
-    if (o.fit.relax_steps < 0) bad_option("fit.relax_steps", str(o.fit.relax_steps), ">= 0");
-    if (o.fit.vertex_steps < 0) bad_option("fit.vertex_steps", str(o.fit.vertex_steps), ">= 0");
-    if (o.fit.boundary_rings < 0) bad_option("fit.boundary_rings", str(o.fit.boundary_rings), ">= 0");
-    if (o.target_faces > 0 && o.target_faces < 4) bad_option("target_faces", str(o.target_faces), "0 or >= 4");
+        throw InvalidInput("smooth_mesh: max_error: meshoptimizer decimates to a face count only");
 #ifndef NORMALFLOW_HAS_CGAL
     if (o.target_faces > 0 && o.decimator == Decimator::Cgal)
         throw InvalidInput("smooth_mesh: decimator cgal: CGAL's edge collapse needs a build with CGAL");

@@ -121,13 +121,15 @@ TEST(Options, OutOfRangeAndMistypedValuesAreRefusedSayingWhatIsExpected) {
 
 TEST(Options, CheckOptionsNamesALibraryCallersBadValue) {
     RunOptions o = default_options(Command::Smooth);
-    EXPECT_NO_THROW(check_options(o, Command::Smooth, "run"));
+    EXPECT_NO_THROW(check_options(o, "run"));
     o.pipeline.smooth.active_band = 10;  // Library tier: no flag, still checked
     try {
-        check_options(o, Command::Smooth, "run");
+        check_options(o, "run");
         ADD_FAILURE() << "active_band 10 passed";
     } catch (const InvalidInput& e) {
-        EXPECT_NE(std::string(e.what()).find("run: active_band = 10: expected a number in [1.5, 5]"), std::string::npos)
+        EXPECT_NE(std::string(e.what()).find(
+                      "run: active_band (pipeline.smooth.active_band) = 10: expected a number in [1.5, 5]"),
+                  std::string::npos)
             << e.what();
     }
 }
