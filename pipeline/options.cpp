@@ -8,6 +8,8 @@
 #include <type_traits>
 
 #include "core/errors.h"
+#include "core/version.h"
+#include "pipeline/report_json.h"
 #include "pipeline/system_memory.h"
 
 namespace normalflow {
@@ -568,6 +570,21 @@ Json resolved_json(const PipelineOptions& o, const PipelineReport& r, double vox
             .set("normal_steps", s.normal_steps > 0 ? s.normal_steps : default_normal_steps(s.mode))
             .set("refit_steps", s.refit_max_steps > 0 ? s.refit_max_steps : default_refit_steps(s));
     }
+    return j;
+}
+
+void set_parameters(Json& j, const RunOptions& run, Command c, const PipelineOptions& opt, const PipelineReport& r,
+                    double voxel_size, bool scan_converted) {
+    j.set("parameters", parameters_json(run, c)).set("resolved", resolved_json(opt, r, voxel_size, scan_converted));
+}
+
+Json run_report_json(Command c, const RunOptions& run, const PipelineReport& r, bool scan_converted) {
+    const PipelineOptions opt = pipeline_options(run, c);
+    Json j = to_json(r);
+    j.set("command", to_string(c));
+    if (opt.smoothing) j.set("mode", to_string(opt.smooth.mode));
+    set_parameters(j, run, c, opt, r, r.scan.grid.voxel_size, scan_converted);
+    j.set("version", version());
     return j;
 }
 

@@ -156,4 +156,15 @@ Json parameters_json(const RunOptions& o, Command c);
 /// scan_converted: the run scan-converted a mesh (a volume input has no resolution of its own).
 Json resolved_json(const PipelineOptions& o, const PipelineReport& r, double voxel_size, bool scan_converted);
 
+/// Sets j's "parameters" (parameters_json: the options as given) and "resolved" (resolved_json: what the run decided
+/// for the automatic ones).
+void set_parameters(Json& j, const RunOptions& run, Command c, const PipelineOptions& opt, const PipelineReport& r,
+                    double voxel_size, bool scan_converted);
+
+/// The report of a run of c on a mesh, one shape for the tool's --json, a batch line's "result" and Python's calls:
+/// the pipeline's report (to_json), "command", "mode" (when it smoothed), "parameters" and "resolved" as above, and
+/// "version". Callers add what only they know (the files, the read and write times). scan_converted: false for a
+/// volume input (resolved_json).
+Json run_report_json(Command c, const RunOptions& run, const PipelineReport& r, bool scan_converted = true);
+
 }  // namespace normalflow

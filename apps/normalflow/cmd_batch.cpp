@@ -123,7 +123,8 @@ struct InterruptOnly : Progress {
     bool should_stop() override { return interrupted(); }
 };
 
-/// Smooths one file into its output; what its JSON line says of the input, the output and the run.
+/// Smooths one file into its output; its JSON line's "result": the run's report as smooth --json has it
+/// (run_report_json), with the input's format and counts and the output's counts.
 Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::size_t& triangles) {
     InterruptOnly progress;
     Mesh result;
@@ -143,8 +144,7 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
         PipelineResult r = smooth_volume_input(v, opt, &progress);
         result = std::move(r.mesh);
         report = std::move(r.report);
-        j.set("parameters", parameters_json(a.run, Command::Smooth))
-            .set("resolved", resolved_json(opt, report, v.grid.voxel_size, false));
+        j = run_report_json(Command::Smooth, a.run, report, /*scan_converted=*/false);
         j.set("input", Json::object().set("format", info.format).set("surface", info.surface));
     } else {
         try {
@@ -157,8 +157,7 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
         PipelineResult r = smooth_mesh(mesh, opt, &progress);
         result = std::move(r.mesh);
         report = std::move(r.report);
-        j.set("parameters", parameters_json(a.run, Command::Smooth))
-            .set("resolved", resolved_json(opt, report, report.scan.grid.voxel_size, true));
+        j = run_report_json(Command::Smooth, a.run, report);
         j.set("input", Json::object()
                            .set("format", info.format)
                            .set("vertices", mesh.positions.size())
@@ -171,7 +170,6 @@ Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::s
     write_mesh(job.output, result, wo);
     triangles = result.triangles.size();
     j.set("output", Json::object().set("vertices", result.positions.size()).set("triangles", triangles));
-    j.set("report", to_json(report));
     return j;
 }
 

@@ -99,10 +99,10 @@ Json input_json(const std::string& file, const ReadInfo& info, const Mesh& mesh,
     return in;
 }
 
-/// The pipeline report's keys, the tool's read seconds in front and the read warnings first.
-Json report_json(const char* command, const PipelineReport& r, double t_read, const ReadInfo* info) {
-    Json j = to_json(r);
-    j.set("command", command);
+/// The run's report (run_report_json, the shape batch and Python share), the tool's read seconds in front and the
+/// read warnings first.
+Json report_json(Command c, const RunOptions& run, const PipelineReport& r, double t_read, const ReadInfo* info) {
+    Json j = run_report_json(c, run, r);
     Json sec = Json::object();
     sec.set("read", t_read).set("repair", r.seconds.repair).set("voxelize", r.seconds.voxelize);
     if (r.smoothed) sec.set("smooth", r.seconds.smooth);
@@ -111,13 +111,6 @@ Json report_json(const char* command, const PipelineReport& r, double t_read, co
     for (const auto& w : r.warnings) warnings.push(w);
     j.set("warnings", warnings);
     return j;
-}
-
-/// The report's "parameters" (the options as given: a config file that repeats the run) and "resolved" (what
-/// the run decided for the automatic ones).
-void set_parameters(Json& j, const RunOptions& run, Command c, const PipelineOptions& opt, const PipelineReport& r,
-                    double voxel_size, bool scan_converted) {
-    j.set("parameters", parameters_json(run, c)).set("resolved", resolved_json(opt, r, voxel_size, scan_converted));
 }
 
 void write_result(const std::string& output, const Mesh& m, TerminalProgress& progress, Json& j,
@@ -155,8 +148,7 @@ int run_voxelize(const PipelineArgs& a) {
     const double t_read = clock.lap();
     PipelineReport r;
     const Volume v = naming(a.input, [&] { return mesh_to_volume(mesh, opt, &r, &progress); });
-    Json j = report_json("voxelize", r, t_read, &info);
-    set_parameters(j, a.run, Command::Voxelize, opt, r, v.grid.voxel_size, true);
+    Json j = report_json(Command::Voxelize, a.run, r, t_read, &info);
     j.set("input", input_json(a.input, info, mesh, r));
     j["voxelize"].set("band_half_width", v.half_width).set("memory_bytes", v.memory_bytes());
     clock.lap();
@@ -267,9 +259,8 @@ int run_smooth(const PipelineArgs& a) {
         naming(a.input, [&] {
             smooth_volume_stage(v, opt, model_length_scale(mesh), &r, &progress, a.run.normal_map ? &normals : nullptr);
         });
-        Json j = report_json("smooth", r, t_read, &info);
-        j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
-        set_parameters(j, a.run, Command::Smooth, opt, r, v.grid.voxel_size, true);
+        Json j = report_json(Command::Smooth, a.run, r, t_read, &info);
+        j.set("input", input_json(a.input, info, mesh, r));
         write_volume_result(a.output, v, progress, j, &normals);
         finish(j, a.out, total, progress);
         progress.note("smooth: " + a.output + " (the smoothed volume, " + std::to_string(v.block_count()) + " blocks)");
@@ -278,9 +269,8 @@ int run_smooth(const PipelineArgs& a) {
     const PipelineResult result = naming(a.input, [&] { return smooth_mesh(mesh, opt, &progress); });
     const PipelineReport& r = result.report;
     const Mesh& m = result.mesh;
-    Json j = report_json("smooth", r, t_read, &info);
-    j.set("mode", to_string(opt.smooth.mode)).set("input", input_json(a.input, info, mesh, r));
-    set_parameters(j, a.run, Command::Smooth, opt, r, r.scan.grid.voxel_size, true);
+    Json j = report_json(Command::Smooth, a.run, r, t_read, &info);
+    j.set("input", input_json(a.input, info, mesh, r));
     j["seconds"].set("extract", r.seconds.extract);
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
     if (r.smooth.stopped_unchanged)
@@ -313,9 +303,8 @@ int run_remesh(const PipelineArgs& a) {
     const double t_read = clock.lap();
     const PipelineResult result = naming(a.input, [&] { return smooth_mesh(mesh, opt, &progress); });
     const PipelineReport& r = result.report;
-    Json j = report_json("remesh", r, t_read, &info);
+    Json j = report_json(Command::Remesh, a.run, r, t_read, &info);
     j.set("input", input_json(a.input, info, mesh, r));
-    set_parameters(j, a.run, Command::Remesh, opt, r, r.scan.grid.voxel_size, true);
     j["seconds"].set("extract", r.seconds.extract);
     if (r.decimated) j["seconds"].set("decimate", r.seconds.decimate);
     write_result(a.output, result.mesh, progress, j, a.run.draco);

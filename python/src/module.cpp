@@ -242,12 +242,6 @@ std::string keyword_help(Command c) {
     return out;
 }
 
-/// A report's "parameters" and "resolved", as the tool writes them.
-void set_parameters(Json& j, const RunOptions& run, Command c, const PipelineOptions& opt, const PipelineReport& r,
-                    double voxel_size, bool scan_converted) {
-    j.set("parameters", parameters_json(run, c)).set("resolved", resolved_json(opt, r, voxel_size, scan_converted));
-}
-
 py::tuple mesh_and_report(Mesh&& m, const Json& j) { return py::make_tuple(py::cast(std::move(m)), j.dump()); }
 
 }  // namespace
@@ -440,11 +434,7 @@ PYBIND11_MODULE(_normalflow, m) {
                 validate(opt);
                 return smooth_mesh(mesh, opt, &progress);
             });
-            Json j = to_json(r.report);
-            j.set("mode", to_string(opt.smooth.mode));
-            set_parameters(j, run, Command::Smooth, opt, r.report, r.report.scan.grid.voxel_size, true);
-            j.set("version", version());
-            return mesh_and_report(std::move(r.mesh), j);
+            return mesh_and_report(std::move(r.mesh), run_report_json(Command::Smooth, run, r.report));
         },
         py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
 
@@ -481,10 +471,7 @@ PYBIND11_MODULE(_normalflow, m) {
                 validate(opt);
                 return smooth_mesh(mesh, opt, &progress);
             });
-            Json j = to_json(r.report);
-            set_parameters(j, run, Command::Remesh, opt, r.report, r.report.scan.grid.voxel_size, true);
-            j.set("version", version());
-            return mesh_and_report(std::move(r.mesh), j);
+            return mesh_and_report(std::move(r.mesh), run_report_json(Command::Remesh, run, r.report));
         },
         py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
 
@@ -496,10 +483,7 @@ PYBIND11_MODULE(_normalflow, m) {
             PyProgress progress(std::move(callback));
             PipelineReport r;
             PyVolume v{released(progress, [&] { return mesh_to_volume(mesh, opt, &r, &progress); }), {}};
-            Json j = to_json(r);
-            set_parameters(j, run, Command::Voxelize, opt, r, v.volume.grid.voxel_size, true);
-            j.set("version", version());
-            return py::make_tuple(py::cast(std::move(v)), j.dump());
+            return py::make_tuple(py::cast(std::move(v)), run_report_json(Command::Voxelize, run, r).dump());
         },
         py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
 

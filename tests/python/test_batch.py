@@ -74,3 +74,22 @@ def test_bad_batches_are_refused_before_any_work(cli, folder, tmp_path):
     p = subprocess.run([cli, "batch", "--list", str(tmp_path / "missing.txt"), "-o", str(tmp_path / "o")],
                        capture_output=True, text=True)
     assert p.returncode == 4 and "missing.txt" in p.stderr
+
+
+def test_a_lines_result_is_the_report_smooth_and_python_give(cli, data, tmp_path):
+    part = data / "pairs_gnf" / "block_n0.4.ply"
+    d = tmp_path / "one"
+    d.mkdir()
+    shutil.copy(part, d / "block.ply")
+    rc, files, _, err = batch(cli, d, "-o", tmp_path / "out", "--resolution", 40, "--sigma-range", 0.3)
+    assert rc == 0, err
+    result = files[0]["result"]
+    p = subprocess.run([cli, "smooth", str(part), str(tmp_path / "s.ply"), "--resolution", "40", "--sigma-range",
+                        "0.3", "--json"], capture_output=True, text=True)
+    tool = json.loads(p.stdout.strip().splitlines()[-1])
+    _, py = nf.smooth(nf.read_mesh(part), resolution=40, sigma_range=0.3)
+    for report in (tool, py):  # one shape: the pipeline's report with the command, parameters and resolved
+        assert report["command"] == result["command"] == "smooth"
+        assert report["parameters"] == result["parameters"] and report["resolved"] == result["resolved"]
+        assert {"voxelize", "smooth", "connectivity", "checked", "version"} <= set(result) & set(report)
+    assert result["output"]["triangles"] == files[0]["triangles"] == tool["output"]["triangles"]
