@@ -7,9 +7,9 @@
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
-#include "extract/decimate.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/pipeline.h"
+#include "remesh/decimate.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/repair.h"
 #endif

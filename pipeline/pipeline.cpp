@@ -12,10 +12,10 @@
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
-#include "extract/decimate.h"
 #include "extract/surface_attributes.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/options.h"
+#include "remesh/decimate.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/memory_estimate.h"
 #ifdef NORMALFLOW_HAS_CGAL

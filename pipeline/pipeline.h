@@ -15,14 +15,14 @@
 #include "core/progress.h"
 #include "core/volume.h"
 #include "extract/extract_surface.h"
-#include "extract/fit_mesh.h"
-#include "extract/sharpen.h"
-#include "extract/trim_to_footprint.h"
+#include "fit/fit_mesh.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #include "metrics/surface_distance.h"
 #include "normals/smooth.h"
 #include "pipeline/system_memory.h"
+#include "remesh/sharpen.h"
+#include "remesh/trim_to_footprint.h"
 #include "sdf/scan_convert.h"
 
 namespace normalflow {
@@ -97,7 +97,7 @@ enum class Decimator {
     Auto,           ///< Quadric, its result checked; CGAL's edge collapse instead where that result breaks a
                     ///< guarantee the input had (closed, manifold, free of self-intersections) and the
                     ///< build has CGAL
-    Quadric,        ///< normalflow's own quadric edge collapse (lib/extract decimate_mesh_qem) only: its
+    Quadric,        ///< normalflow's own quadric edge collapse (lib/remesh decimate_mesh_qem) only: its
                     ///< result is checked and reported, never replaced
     Meshoptimizer,  ///< meshoptimizer's simplifier (io/meshopt; fast, but version 0.18 leaves extracted
                     ///< surfaces non-manifold and self-intersecting: docs/history/benchmarks-2026.md, "Decimation")

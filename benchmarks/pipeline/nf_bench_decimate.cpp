@@ -2,7 +2,7 @@
 //
 // For each model: scan-convert at resolution R and extract (pipeline/ smooth_mesh without the
 // smoothing stage), then decimate the same extraction to N faces three ways, alternating:
-//   quadric  lib/extract decimate_mesh_qem alone (normalflow's quadric edge collapse),
+//   quadric  lib/remesh decimate_mesh_qem alone (normalflow's quadric edge collapse),
 //   meshopt  io/meshopt decimate_mesh alone (meshoptimizer's simplifier),
 //   auto     pipeline/ decimate_mesh with Decimator::Auto (what --target-faces runs: the quadric
 //            collapse, the checks and the distances, CGAL where a check fails),
@@ -26,12 +26,12 @@
 
 #include "core/mesh.h"
 #include "core/mesh_report.h"
-#include "extract/decimate.h"
 #include "io/cgal/repair.h"
 #include "io/io.h"
 #include "io/meshopt/decimate.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/pipeline.h"
+#include "remesh/decimate.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;

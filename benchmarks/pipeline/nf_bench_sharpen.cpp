@@ -9,11 +9,11 @@
 
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
-#include "extract/sharpen.h"
 #include "io/cgal/repair.h"
 #include "io/io.h"
 #include "metrics/compare.h"
 #include "pipeline/pipeline.h"
+#include "remesh/sharpen.h"
 #include "sdf/closest_triangle.h"
 
 using namespace normalflow;

@@ -1,6 +1,6 @@
 #pragma once
 /// \file volume_sampler.h
-/// Internal to lib/extract: φ and ∇φ of a volume at any world position, shared by fit_mesh_to_volume
+/// Internal to lib/extract and lib/fit: φ and ∇φ of a volume at any world position, shared by fit_mesh_to_volume
 /// and the surface attributes (vertex normals from the volume).
 
 #include <cmath>

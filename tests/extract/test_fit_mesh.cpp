@@ -1,4 +1,4 @@
-// Tests of fit_mesh_to_volume (lib/extract/fit_mesh.h): the user's mesh moved onto a volume's zero
+// Tests of fit_mesh_to_volume (lib/fit/fit_mesh.h): the user's mesh moved onto a volume's zero
 // level set with its connectivity kept. Analytic cases first (a noisy icosphere lands on its sphere,
 // a noisy box's faces turn flat), then properties (the open boundary stays, coincident positions
 // stay coincident, the thread count does not matter), then bad input.
@@ -14,7 +14,7 @@
 #include <random>
 
 #include "core/errors.h"
-#include "extract/fit_mesh.h"
+#include "fit/fit_mesh.h"
 #include "normals/volume_fixtures.h"
 #include "sdf/sdf_test_meshes.h"
 

@@ -1,4 +1,4 @@
-// Tests of sharpen_mesh (lib/extract/sharpen.h): an extraction's vertices moved onto the creases and corners of
+// Tests of sharpen_mesh (lib/remesh/sharpen.h): an extraction's vertices moved onto the creases and corners of
 // the surface it approximates. Known answers first (a box and an octahedron get their corners back within a small
 // fraction of a voxel), then properties (a sphere is not made worse, moves are bounded, faces never turn, the
 // thread count does not matter), then bad input.
@@ -11,7 +11,7 @@
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "extract/extract_surface.h"
-#include "extract/sharpen.h"
+#include "remesh/sharpen.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/scan_convert.h"
 #include "sdf/sdf_test_meshes.h"

@@ -1,4 +1,4 @@
-// Tests of trim_to_footprint (lib/extract/trim_to_footprint.h) on an analytic case: the sphere
+// Tests of trim_to_footprint (lib/remesh/trim_to_footprint.h) on an analytic case: the sphere
 // extracted from a volume, trimmed to a sphere with a hole (the open input). The pipeline tests run it
 // on real open scans (tests/pipeline).
 
@@ -8,7 +8,7 @@
 
 #include "core/errors.h"
 #include "core/mesh_report.h"
-#include "extract/trim_to_footprint.h"
+#include "remesh/trim_to_footprint.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/sdf_test_meshes.h"
 

@@ -1,4 +1,4 @@
-// Decimation: normalflow's quadric edge collapse (lib/extract decimate_mesh_qem), meshoptimizer's
+// Decimation: normalflow's quadric edge collapse (lib/remesh decimate_mesh_qem), meshoptimizer's
 // simplifier (io/meshopt) and the pipeline's checked decimate_mesh, with CGAL's edge collapse as the
 // fallback and the alternative.
 #include <gtest/gtest.h>
@@ -17,7 +17,6 @@
 
 #include "core/errors.h"
 #include "core/mesh_report.h"
-#include "extract/decimate.h"
 #include "extract/extract_surface.h"
 #include "extract/surface_attributes.h"
 #include "io/cgal/repair.h"
@@ -25,6 +24,7 @@
 #include "io/meshopt/decimate.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/pipeline.h"
+#include "remesh/decimate.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/scan_convert.h"
 #include "sdf/sdf_test_meshes.h"

@@ -13,11 +13,11 @@
 
 #include "core/errors.h"
 #include "core/mesh_report.h"
-#include "extract/decimate.h"
 #include "io/cgal/repair.h"
 #include "io/io.h"
 #include "metrics/compare.h"
 #include "pipeline/pipeline.h"
+#include "remesh/decimate.h"
 #include "sdf/sdf_test_meshes.h"
 
 namespace normalflow {

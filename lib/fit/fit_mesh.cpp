@@ -1,4 +1,4 @@
-#include "extract/fit_mesh.h"
+#include "fit/fit_mesh.h"
 
 #include <algorithm>
 #include <cmath>

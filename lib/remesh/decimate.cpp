@@ -1,4 +1,4 @@
-#include "extract/decimate.h"
+#include "remesh/decimate.h"
 
 #include <algorithm>
 #include <array>
@@ -17,7 +17,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "core/errors.h"
-#include "extract/quadric.h"
+#include "remesh/quadric.h"
 
 namespace normalflow {
 namespace {

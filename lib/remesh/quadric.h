@@ -1,6 +1,6 @@
 #pragma once
 /// \file quadric.h
-/// Internal to lib/extract: the quadric error of a set of planes (Garland & Heckbert 1997) and its minimisers,
+/// Internal to lib/remesh: the quadric error of a set of planes (Garland & Heckbert 1997) and its minimisers,
 /// shared by the quadric decimation (decimate.cpp) and the feature sharpening (sharpen.cpp).
 #include <algorithm>
 #include <cmath>

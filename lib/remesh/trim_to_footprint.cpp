@@ -1,4 +1,4 @@
-#include "extract/trim_to_footprint.h"
+#include "remesh/trim_to_footprint.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "extract/sharpen.h"
+#include "remesh/sharpen.h"
 
 #include <algorithm>
 #include <chrono>
@@ -11,8 +11,8 @@
 #include <tbb/task_arena.h>
 
 #include "core/errors.h"
-#include "extract/quadric.h"
 #include "extract/volume_sampler.h"
+#include "remesh/quadric.h"
 
 namespace normalflow {
 
