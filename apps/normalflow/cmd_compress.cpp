@@ -1,5 +1,5 @@
-// normalflow compress IN OUT.(drc|glb) [--position-bits 14] [--normal-bits 10] [--texcoord-bits 12] [--level 7]
-//                     [--fallback]
+// normalflow compress IN OUT.(drc|glb): a mesh written as Draco, with the Draco options of the options table
+// (pipeline/options.h, group WebOutput).
 #include <cstdio>
 #include <filesystem>
 #include <memory>
