@@ -2,9 +2,10 @@
 
 // smooth_volume: the loop over the engine's stages. The narrow band, its block layout, the band
 // move and the reinitialisation are lib/band (Band, after OpenVDB's LevelSetTracker); the normal
-// filters (isotropic, anisotropic, high-boost, behind NormalFilter, after OpenVDB's
-// LevelSetFilter), the refit and mean curvature flow are lib/normals/stages; the row kernels they
-// run are lib/normals/kernels.
+// filters (isotropic, anisotropic, high-boost, and bilateral, guided and total variation on the
+// surface samples, behind NormalFilter, after OpenVDB's LevelSetFilter, each with its rules), the
+// refit and mean curvature flow are lib/normals/stages; the row kernels they run are
+// lib/normals/kernels.
 
 #include <tbb/task_arena.h>
 
@@ -52,13 +53,15 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 /// kHalfWidth.
 float working_limit(const SmoothOptions& opt) { return std::min(engine::kHalfWidth, opt.active_band + 3.0f); }
 
-/// The main iterations on a band with a surface (opt.iterations resolved).
-void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progress* progress, bool auto_stop,
+/// The main iterations on a band with a surface (opt's defaults resolved); iterations_given: the
+/// caller set SmoothOptions::iterations (then no early stop when the normal map is smooth).
+void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progress* progress, bool iterations_given,
          NormalMap* normal_map) {
     using namespace engine;
     RunControl ctl(progress, opt.iterations);
     StageContext c{band, opt, rep, ctl};
     const std::unique_ptr<NormalFilter> filter = make_normal_filter(opt.mode);  // none: mean curvature flow
+    const bool auto_stop = !iterations_given && filter && filter->stops_when_smooth();
     const auto t_band = Clock::now();
     band.update_band();
     // out to the full half width, not just working_limit(): a run that stops in its first
@@ -77,9 +80,9 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
             filter->filter_normals(c);
             rep.seconds_normals += seconds_since(t0);
             const auto t1 = Clock::now();
-            const bool keep = opt.preserve_volume && is_neighbourhood_filter(opt.mode);
+            const bool keep = filter->preserves_volume(opt);
             const double volume = keep ? active_volume(band) : 0.0;
-            refit_to_normals(c);
+            refit_to_normals(c, filter->refit_rules());
             if (keep && record.refit_steps > 0) record.volume_shift = restore_volume(band, volume);
             if (normal_map)  // this iteration's N, the last one's in the end (the band moves next)
                 for (std::size_t a = 0; a < 3; ++a)
@@ -162,27 +165,21 @@ void validate_smooth_options(const SmoothOptions& opt, const std::string& who, c
     if (opt.threads < 0) bad("threads must be >= 0, got " + std::to_string(opt.threads));
 }
 
+// The defaults are the filter's rules (lib/normals/stages); mean curvature flow, which has no
+// filter, takes the diffusions'.
 int default_iterations(SmoothMode mode) {
-    switch (mode) {
-        case SmoothMode::Anisotropic: return 16;
-        case SmoothMode::Bilateral:
-        case SmoothMode::Guided:
-        case SmoothMode::TotalVariation: return kNeighbourhoodIterations;
-        default: return 8;
-    }
+    const auto filter = engine::make_normal_filter(mode);
+    return filter ? filter->default_iterations() : engine::kDiffusionIterations;
 }
 
 int default_refit_steps(const SmoothOptions& opt) {
-    if (!is_neighbourhood_filter(opt.mode)) return 40;
-    const float ell = opt.length_scale > 0.0f ? opt.length_scale : kDefaultLengthScale;
-    const double steps =
-        std::ceil(double(kNeighbourhoodRefitTime) * ell * ell / std::min(opt.refit_dt, engine::kMaxDt));
-    return int(std::clamp(steps, 40.0, 100000.0));
+    const auto filter = engine::make_normal_filter(opt.mode);
+    return filter ? filter->default_refit_steps(opt) : engine::kDiffusionRefitSteps;
 }
 
 int default_normal_steps(SmoothMode mode) {
-    if (mode == SmoothMode::TotalVariation) return kTotalVariationSteps;
-    return is_neighbourhood_filter(mode) ? kNeighbourhoodPasses : 50;
+    const auto filter = engine::make_normal_filter(mode);
+    return filter ? filter->default_normal_steps() : engine::kDiffusionSteps;
 }
 
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress, NormalMap* normal_map) {
@@ -204,8 +201,7 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
             rep.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");
             return;
         }
-        const bool auto_stop = options.iterations == 0 && is_neighbourhood_filter(opt.mode);
-        run(band, opt, rep, progress, auto_stop, normal_map);
+        run(band, opt, rep, progress, options.iterations != 0, normal_map);
         band.write_back(v);
     };
     if (options.threads > 0) {

@@ -1,8 +1,8 @@
 // Tests of the neighbourhood filters of the normal map (SmoothMode::Bilateral and Guided,
-// lib/normals/stages/bilateral.cpp) and of what they rely on: the length scale in the model's units
-// and the volume constraint. Known answers first (a sphere does not drift, a noisy cube comes out
-// with flat faces and sharp edges), then properties (a finer grid is no worse, a clean box is left
-// alone, the thread count does not matter), then bad options.
+// lib/normals/stages/bilateral.cpp and guided.cpp, on surface_filter.h) and of what they rely on:
+// the length scale in the model's units and the volume constraint. Known answers first (a sphere
+// does not drift, a noisy cube comes out with flat faces and sharp edges), then properties (a finer
+// grid is no worse, a clean box is left alone, the thread count does not matter), then bad options.
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 #pragma once
 /// \file pair_sum.h
-/// The inner loop of the band's neighbourhood filters (stages/shell.h): weighted sums of the
+/// The inner loop of the band's neighbourhood filters (stages/surface_filter.h): weighted sums of the
 /// values of a run of surface samples around a query point.
 
 #include <cstdint>

@@ -114,6 +114,11 @@ float conductance_scale(StageContext& c, const Field3& raw, const Field3& presmo
 
 class AnisotropicFilter final : public NormalFilter {
 public:
+    /// 16 main iterations (the tuning is told at SmoothOptions::iterations).
+    int default_iterations() const override { return 16; }
+    /// The second-order term's G is the Perona–Malik penalty.
+    RefitRules refit_rules() const override { return {RefitPenalty::PeronaMalik, RefitSchedule::FirstRise}; }
+
     void filter_normals(StageContext& c) override {
         WorkBuffers& w = c.band.work();
         loop_.prepare(c);

@@ -17,9 +17,9 @@
 namespace normalflow::engine {
 namespace {
 
-/// G(κ²), the penalty of the normal energy, and its derivative g.
-inline float penalty(SmoothMode mode, float k2, float inv2mu2) {
-    if (mode == SmoothMode::Anisotropic) return (1.0f - std::exp(-k2 * inv2mu2)) / inv2mu2;
+/// G(κ²), the penalty of the normal energy.
+inline float penalty(RefitPenalty p, float k2, float inv2mu2) {
+    if (p == RefitPenalty::PeronaMalik) return (1.0f - std::exp(-k2 * inv2mu2)) / inv2mu2;
     return k2;
 }
 
@@ -34,13 +34,13 @@ inline void add_plane_energy(const float* P, const std::uint8_t* mask, const Fie
     }
 }
 
-/// H_N = ∇·N (central differences, Eq. 53) [− T ∇·(G N), Eq. 39] over the active blocks.
-void target_curvature(StageContext& c) {
+/// H_N = ∇·N (central differences, Eq. 53) [− T ∇·(G N), Eq. 39, G the penalty p] over the active
+/// blocks.
+void target_curvature(StageContext& c, RefitPenalty p) {
     Band& band = c.band;
     WorkBuffers& w = band.work();
     const bool second = c.opt.second_order_term;
     const float inv2mu2 = 1.0f / (2.0f * c.opt.mu * c.opt.mu);
-    const SmoothMode emode = c.opt.mode == SmoothMode::Anisotropic ? SmoothMode::Anisotropic : SmoothMode::Isotropic;
     if (second) {
         // G per sample from the central-difference shape matrix of N, into w.phi_next
         band.for_blocks(band.all_blocks(), 3, [&](std::size_t, std::int32_t b, Scratch& s) {
@@ -62,8 +62,7 @@ void target_curvature(StageContext& c) {
                             }
                             v2 += vc * vc;
                         }
-                        w.phi_next[base + std::size_t(bidx(x, y, z))] =
-                            penalty(emode, std::max(dn2 - v2, 0.0f), inv2mu2);
+                        w.phi_next[base + std::size_t(bidx(x, y, z))] = penalty(p, std::max(dn2 - v2, 0.0f), inv2mu2);
                     }
         });
     }
@@ -253,7 +252,8 @@ struct ExplicitResult {
     int steps = 0;
     double d_end = 0.0;
 };
-ExplicitResult explicit_refit(StageContext& c, int max_steps, int patience, std::vector<double>& ds);
+ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule schedule, int patience,
+                              std::vector<double>& ds);
 /// The explicit refit's patience: steps without a new low of D before it stops (surface-sample filters).
 int explicit_patience(const SmoothOptions& o) { return std::max(5, o.refit_max_steps / 20); }
 
@@ -373,7 +373,8 @@ void refit_super_stepping(StageContext& c) {
     for (int attempt = 0;; ++attempt) {
         if (attempt == kSuperStepRetries) {
             const int rest = int(std::lround(left / dt));
-            const ExplicitResult e = explicit_refit(c, std::max(rest, 1), explicit_patience(c.opt), ds);
+            const ExplicitResult e =
+                explicit_refit(c, std::max(rest, 1), RefitSchedule::Patient, explicit_patience(c.opt), ds);
             kept += e.steps;
             d_end = e.d_end;
             break;
@@ -404,14 +405,14 @@ void refit_super_stepping(StageContext& c) {
 /// so that a step that raised D can be undone; the buffer the reinitialisation has already
 /// written, so no fresh pages are touched). Samples outside the active blocks are equal in
 /// all three (refit_step writes only the active blocks).
-void refit_to_normals(StageContext& c) {
-    target_curvature(c);  // may use w.phi_next as scratch
-    if (c.opt.refit_super_steps > 0 && is_neighbourhood_filter(c.opt.mode)) {
+void refit_to_normals(StageContext& c, const RefitRules& rules) {
+    target_curvature(c, rules.penalty);  // may use w.phi_next as scratch
+    if (c.opt.refit_super_steps > 0 && rules.schedule == RefitSchedule::Patient) {
         refit_super_stepping(c);
         return;
     }
     std::vector<double> ds;  // D of each iterate evaluated
-    const ExplicitResult e = explicit_refit(c, c.opt.refit_max_steps, explicit_patience(c.opt), ds);
+    const ExplicitResult e = explicit_refit(c, c.opt.refit_max_steps, rules.schedule, explicit_patience(c.opt), ds);
     SmoothIteration& r = c.record();
     r.refit_energy = std::move(ds);
     r.refit_energy_end = e.d_end;
@@ -422,7 +423,8 @@ namespace {
 
 /// Up to max_steps explicit refit steps from φ, D of each iterate appended to ds; φ ends as the
 /// iterate the stop rule keeps (see refit_to_normals).
-ExplicitResult explicit_refit(StageContext& c, int max_steps, int patience, std::vector<double>& ds) {
+ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule schedule, int patience,
+                              std::vector<double>& ds) {
     WorkBuffers& w = c.band.work();
     Samples& phi = c.band.phi();
     copy_samples(phi, w.phi_next);
@@ -436,7 +438,7 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, int patience, std:
     // and not on the next (sharpsphere_n0.3 at resolution 239: 28 steps, 12.0°; at 230 and 256
     // the whole time, 6.4°). Their refit stops when D has not reached a new low for `patience`
     // steps, or when it rose to twice its low (a refit that runs away), undoing that last step.
-    const bool patient = is_neighbourhood_filter(c.opt.mode);
+    const bool patient = schedule == RefitSchedule::Patient;
     double best = 0.0;
     int since_best = 0;
     for (int s = 0; s < max_steps; ++s) {

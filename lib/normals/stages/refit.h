@@ -8,10 +8,34 @@
 
 namespace normalflow::engine {
 
-/// H_N = ∇·N of band.work().normals [− T ∇·(G N), SmoothOptions::second_order_term] into
-/// work().hn, then refit steps until D stops decreasing; φ ends as the iterate with the smallest D
-/// seen. Reports D and the steps kept to c.record(). Uses work().phi_next and work().spare().
-void refit_to_normals(StageContext& c);
+/// The penalty G(κ²) of the filter's normal energy, for the second-order term ∇·(G N).
+enum class RefitPenalty {
+    Quadratic,    ///< G = κ² (isotropic, high-boost, the surface-sample filters)
+    PeronaMalik,  ///< G = (1 − exp(−κ²/(2µ²)))·2µ² (anisotropic, Eq. 20)
+};
+
+/// How the refit runs and when it stops.
+enum class RefitSchedule {
+    /// Explicit steps of refit_dt until D decreases by less than refit_tolerance of itself (the
+    /// diffusions): a step that raised D is undone.
+    FirstRise,
+    /// The surface-sample filters' normal maps are not exactly integrable: D wanders a little on
+    /// its way down. The refit stops when D has not reached a new low for max(5, refit_max_steps/20)
+    /// steps, or rose to twice its low; in refit_super_steps super steps when that is > 0.
+    Patient,
+};
+
+/// What the refit takes from the filter whose normals it fits (NormalFilter::refit_rules).
+struct RefitRules {
+    RefitPenalty penalty = RefitPenalty::Quadratic;
+    RefitSchedule schedule = RefitSchedule::FirstRise;
+};
+
+/// H_N = ∇·N of band.work().normals [− T ∇·(G N), SmoothOptions::second_order_term, G by
+/// rules.penalty] into work().hn, then refit steps until D stops decreasing (rules.schedule); φ
+/// ends as the iterate with the smallest D seen. Reports D and the steps kept to c.record(). Uses
+/// work().phi_next and work().spare().
+void refit_to_normals(StageContext& c, const RefitRules& rules);
 
 /// One explicit step φ ← φ + dt |∇φ|_upwind (H_φ − work().hn) on the active samples (φ →
 /// work().phi_next, then swapped), dt = refit_dt (at most 1/6). Returns D(φ before the step) when

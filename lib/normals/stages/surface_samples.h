@@ -1,7 +1,7 @@
 #pragma once
 /// \file surface_samples.h
 /// The samples of the band next to the surface as a point set on it, for the filters that
-/// average over a neighbourhood of fixed size in the model's units (bilateral.cpp): each sample
+/// average over a neighbourhood of fixed size in the model's units (surface_filter.h): each sample
 /// with |φ| <= tau, moved to its closest point on the zero level, x − φ·∇φ/|∇φ|, with its
 /// normal. Grouped by block (slot order), within a block by its eight 4³ octants, each octant's
 /// run padded to a multiple of 8 samples far away, so that kernels/pair_sum runs over whole runs;

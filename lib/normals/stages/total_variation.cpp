@@ -1,9 +1,16 @@
+// Total variation of the normal map on the surface samples (total_variation.h): the primal–dual
+// solver, and the filter of SmoothMode::TotalVariation that runs it (surface_filter.h).
 #include "normals/stages/total_variation.h"
 
 #include <cmath>
 #include <cstddef>
+#include <memory>
+#include <vector>
 
 #include "band/iterate.h"
+#include "normals/smooth.h"
+#include "normals/stages/normal_filter.h"
+#include "normals/stages/surface_filter.h"
 
 namespace normalflow::engine {
 
@@ -161,5 +168,38 @@ double TotalVariation::energy(const Band& band, const Samples (&N)[3], float alp
     for (double e : per) total += e;
     return total;
 }
+
+namespace {
+
+/// The filter: normal_steps primal–dual iterations on all the surface samples (no pass loop), the
+/// fidelity's length tv_lambda·ℓ; the extension then takes one bilateral pass of the result.
+class TotalVariationFilter final : public SurfaceSampleFilter {
+public:
+    int default_normal_steps() const override { return kTotalVariationSteps; }
+
+private:
+    void filter_samples(StageContext& c, const Disc& d) override {
+        const float alpha = 1.0f / (c.opt.tv_lambda * d.ell);
+        solver_.build(c.band, S_);
+        solver_.solve(c.band, cur_, alpha, c.opt.normal_steps, [&] { c.ctl.poll(); });
+        energy_[0] = solver_.initial_energy();
+        energy_[1] = solver_.energy(c.band, cur_, alpha);
+        c.ctl.tick(0.5);
+    }
+
+    /// Every sample: the objective's graph joins grid neighbours.
+    int stride(const SmoothOptions&, float) const override { return 1; }
+
+    /// The objective E before and after the solve (the G that filter_normals measured before it
+    /// is not reported).
+    std::vector<double> normal_energy(StageContext&, double) override { return {energy_[0], energy_[1]}; }
+
+    TotalVariation solver_;
+    double energy_[2] = {0.0, 0.0};
+};
+
+}  // namespace
+
+std::unique_ptr<NormalFilter> make_total_variation_filter() { return std::make_unique<TotalVariationFilter>(); }
 
 }  // namespace normalflow::engine
