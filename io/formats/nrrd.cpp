@@ -1,22 +1,22 @@
 #include "io/formats/nrrd.h"
 
+// read_nrrd and read_nrrd_image: the data of a NRRD file (raw, gzip or ascii samples, attached or
+// in a detached data file) into a Volume or a ScalarImage, after the header (nrrd_header.cpp);
+// write_nrrd.
+
 #include <sys/stat.h>
 
 #include <algorithm>
 #include <bit>
-#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <limits>
-#include <map>
 #include <memory>
 #include <new>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,404 +25,33 @@
 #endif
 
 #include "core/errors.h"
+#include "io/formats/nrrd_reader.h"
 #include "io/util/atomic_file.h"
 
 namespace normalflow {
 
+namespace detail {
+
 namespace {
-
-constexpr std::size_t kMaxHeaderBytes = 1 << 20;  // a header larger than 1 MiB is garbage
-constexpr double kMaxSamples = 1ull << 40;        // sanity bound on sizes
-constexpr double kMaxDeflateRatio = 1100.0;       // deflate cannot expand more than ~1032:1
-
-enum class Scalar { I8, U8, I16, U16, I32, U32, F32, F64 };
-
-std::size_t scalar_bytes(Scalar s) {
-    switch (s) {
-        case Scalar::I8:
-        case Scalar::U8: return 1;
-        case Scalar::I16:
-        case Scalar::U16: return 2;
-        case Scalar::I32:
-        case Scalar::U32:
-        case Scalar::F32: return 4;
-        case Scalar::F64: return 8;
-    }
-    return 0;
-}
-
-std::optional<Scalar> parse_type(const std::string& t) {
-    static const std::map<std::string, Scalar> table = {{"signed char", Scalar::I8},
-                                                        {"int8", Scalar::I8},
-                                                        {"int8_t", Scalar::I8},
-                                                        {"uchar", Scalar::U8},
-                                                        {"unsigned char", Scalar::U8},
-                                                        {"uint8", Scalar::U8},
-                                                        {"uint8_t", Scalar::U8},
-                                                        {"short", Scalar::I16},
-                                                        {"short int", Scalar::I16},
-                                                        {"signed short", Scalar::I16},
-                                                        {"signed short int", Scalar::I16},
-                                                        {"int16", Scalar::I16},
-                                                        {"int16_t", Scalar::I16},
-                                                        {"ushort", Scalar::U16},
-                                                        {"unsigned short", Scalar::U16},
-                                                        {"unsigned short int", Scalar::U16},
-                                                        {"uint16", Scalar::U16},
-                                                        {"uint16_t", Scalar::U16},
-                                                        {"int", Scalar::I32},
-                                                        {"signed int", Scalar::I32},
-                                                        {"int32", Scalar::I32},
-                                                        {"int32_t", Scalar::I32},
-                                                        {"uint", Scalar::U32},
-                                                        {"unsigned int", Scalar::U32},
-                                                        {"uint32", Scalar::U32},
-                                                        {"uint32_t", Scalar::U32},
-                                                        {"float", Scalar::F32},
-                                                        {"double", Scalar::F64}};
-    const auto it = table.find(t);
-    if (it == table.end()) return std::nullopt;
-    return it->second;
-}
-
-std::string trim(const std::string& s) {
-    std::size_t a = 0, b = s.size();
-    while (a < b && std::isspace(static_cast<unsigned char>(s[a]))) ++a;
-    while (b > a && std::isspace(static_cast<unsigned char>(s[b - 1]))) --b;
-    return s.substr(a, b - a);
-}
-
-std::string lower(std::string s) {
-    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
-/// Closes a FILE* on scope exit.
-struct FileCloser {
-    void operator()(std::FILE* f) const {
-        if (f) std::fclose(f);
-    }
-};
-using FilePtr = std::unique_ptr<std::FILE, FileCloser>;
-
-/// Where the samples of a NRRD file lie, as its header says: sample (i, j, k) at origin + i·axes[0] +
-/// j·axes[1] + k·axes[2].
-struct NrrdGeometry {
-    enum class From { Default, Spacings, Directions } from = From::Default;
-    std::array<Vec3d, 3> axes{Vec3d{1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, 0, 1}};
-    Vec3d origin;
-    std::string text;  ///< the spacings or space directions field as written, for messages
-};
-
-/// Parser state for one NRRD file (and its detached data file); every error names the header file
-/// and starts with `who` (read_nrrd, read_nrrd_image).
-///
-/// Use: parse_header(), geometry(), open_data(), then read_samples() until every sample is read.
-class NrrdReader {
-public:
-    NrrdReader(const std::string& path, const char* who) : path_(path), who_(who) {}
-
-    /// Streams the samples into a narrow-band Volume (read_nrrd).
-    Volume read_volume(const VolumeReadOptions& opt);
-    /// Reads every sample into a dense image (read_nrrd_image).
-    ScalarImage read_image();
-
-private:
-    [[noreturn]] void bad(const std::string& what) const { throw InvalidInput(who_ + ": " + path_ + ": " + what); }
-    [[noreturn]] void bad_line(const std::string& what) const { bad("line " + std::to_string(line_no_) + ": " + what); }
-    [[noreturn]] void io_error(const std::string& what) const { throw IoError(who_ + ": " + path_ + ": " + what); }
-
-    /// Opens the header file and parses the header; the stream is left at the first byte after it.
-    void parse_header();
-    bool read_line(std::string& line);
-    std::vector<double> parse_numbers(const std::string& s, std::size_t expected, const char* field);
-    std::vector<std::optional<std::array<double, 3>>> parse_vectors(const std::string& s);
-    /// The geometry fields, parsed (finite numbers, three spatial axes), not yet judged.
-    NrrdGeometry geometry();
-    /// Opens the detached data file if there is one, applies line skip and byte skip, and checks that
-    /// the data can hold what the sizes claim (before anything is allocated).
-    void open_data();
-    std::uint64_t sample_count() const {
-        return std::uint64_t(sizes_[0]) * std::uint64_t(sizes_[1]) * std::uint64_t(sizes_[2]);
-    }
-
-    // Data sources: fill exactly `bytes` bytes or throw.
-    void read_raw(void* dst, std::size_t bytes);
-    void read_gzip(void* dst, std::size_t bytes);
-    void read_ascii(double* dst, std::size_t count);
-    void read_samples(double* dst, std::size_t count);
-
-    std::string path_;
-    std::string who_;
-    FilePtr f_;
-    std::uint64_t file_size_ = 0;  // of the file f_ reads: the header file, then the data file
-    std::size_t header_bytes_ = 0;
-    int line_no_ = 0;
-
-    std::map<std::string, std::string> fields_;  // lower-case field name -> description
-    std::map<std::string, std::string> keys_;    // key:=value pairs
-    std::string data_file_;                      // detached data file as written, or empty
-    Scalar type_ = Scalar::F32;
-    std::array<std::int64_t, 3> sizes_{0, 0, 0};
-    enum class Encoding { Raw, Gzip, Ascii } encoding_ = Encoding::Raw;
-    bool swap_ = false;
-    std::int64_t byte_skip_ = 0;
-    std::int64_t line_skip_ = 0;
-    std::uint64_t samples_read_ = 0;
+constexpr double kMaxDeflateRatio = 1100.0;  // deflate cannot expand more than ~1032:1
+}  // namespace
 
 #if defined(NORMALFLOW_HAS_ZLIB)
-    struct Inflater {
-        z_stream zs{};
-        bool init = false;
-        bool done = false;
-        std::vector<unsigned char> in;
-        ~Inflater() {
-            if (init) inflateEnd(&zs);
-        }
-    };
-    std::unique_ptr<Inflater> z_;
-#endif
-    std::vector<char> raw_buf_;
+struct NrrdReader::Inflater {
+    z_stream zs{};
+    bool init = false;
+    bool done = false;
+    std::vector<unsigned char> in;
+    ~Inflater() {
+        if (init) inflateEnd(&zs);
+    }
 };
-
-bool NrrdReader::read_line(std::string& line) {
-    line.clear();
-    int c;
-    while ((c = std::fgetc(f_.get())) != EOF) {
-        if (++header_bytes_ > kMaxHeaderBytes) bad("header longer than 1 MiB (not a NRRD file?)");
-        if (c == '\n') break;
-        if (c == '\0')
-            bad("line " + std::to_string(line_no_ + 1) + ": NUL byte in header (truncated or not a NRRD file)");
-        line.push_back(char(c));
-    }
-    if (c == EOF && line.empty()) return false;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    ++line_no_;
-    return true;
-}
-
-void NrrdReader::parse_header() {
-    f_.reset(std::fopen(path_.c_str(), "rb"));
-    if (!f_) io_error(std::string("cannot open (") + std::strerror(errno) + ")");
-    if (std::fseek(f_.get(), 0, SEEK_END) != 0) io_error("cannot seek (not a regular file?)");
-    const long fs = std::ftell(f_.get());
-    if (fs < 0) io_error("cannot determine the file size");
-    file_size_ = std::uint64_t(fs);
-    std::rewind(f_.get());
-    if (file_size_ == 0) bad("empty file");
-
-    std::string line;
-    if (!read_line(line)) bad("empty file");
-    if (line.size() != 8 || line.compare(0, 7, "NRRD000") != 0 || line[7] < '1' || line[7] > '5')
-        bad("not a NRRD file (expected magic NRRD0001..NRRD0005, found \"" + line.substr(0, 16) + "\")");
-    bool blank = false;
-    while (read_line(line)) {
-        if (line.empty()) {
-            blank = true;
-            break;
-        }
-        if (line[0] == '#') continue;
-        const std::size_t kv = line.find(":=");
-        const std::size_t colon = line.find(": ");
-        if (kv != std::string::npos && (colon == std::string::npos || kv < colon)) {
-            keys_[line.substr(0, kv)] = line.substr(kv + 2);
-            continue;
-        }
-        if (colon == std::string::npos)
-            bad_line("expected \"field: description\", found \"" + line.substr(0, 40) + "\"");
-        const std::string name = lower(trim(line.substr(0, colon)));
-        if (fields_.count(name)) bad_line("field \"" + name + "\" given twice");
-        fields_[name] = trim(line.substr(colon + 2));
-        // "data file: LIST" is the last field: the file names follow it, one a line.
-        if ((name == "data file" || name == "datafile") &&
-            (fields_[name] == "LIST" || fields_[name].rfind("LIST ", 0) == 0))
-            bad_line(
-                "data file: LIST (a list of data files after the header) is not supported; use a single data file");
-    }
-    // Detached data: one file, named relative to the header's folder (or absolute).
-    if (fields_.count("data file") && fields_.count("datafile")) bad("both \"data file\" and \"datafile\" given");
-    if (const auto it = fields_.count("data file") ? fields_.find("data file") : fields_.find("datafile");
-        it != fields_.end()) {
-        const std::string& d = it->second;
-        if (d.empty()) bad("data file: no file name given");
-        if (d.find('%') != std::string::npos)
-            bad("data file: \"" + d +
-                "\" is a format string naming several data files; only a single data file is supported");
-        data_file_ = d;
-    }
-    // A header must end with a blank line before attached data; without one the file is truncated.
-    if (!blank && data_file_.empty()) bad("truncated header (no blank line before the data)");
-
-    auto need = [&](const char* name) -> const std::string& {
-        const auto it = fields_.find(name);
-        if (it == fields_.end()) bad(std::string("missing required field \"") + name + "\"");
-        return it->second;
-    };
-    // dimension
-    {
-        const std::string& d = need("dimension");
-        if (d != "3") bad("dimension is " + d + ", expected 3");
-    }
-    // type
-    {
-        const std::string& t = need("type");
-        const auto s = parse_type(lower(t));
-        if (!s) bad("unsupported type \"" + t + "\" (expected float, double, (u)char, (u)short or (u)int)");
-        type_ = *s;
-    }
-    // sizes
-    {
-        const auto v = parse_numbers(need("sizes"), 3, "sizes");
-        double total = 1;
-        for (int a = 0; a < 3; ++a) {
-            if (v[a] < 1 || v[a] != std::floor(v[a]) || v[a] > double(1 << 30))
-                bad("sizes: axis " + std::to_string(a) + " has size " + trim(std::to_string(v[a])) +
-                    ", expected an integer in [1, 2^30]");
-            sizes_[a] = std::int64_t(v[a]);
-            total *= v[a];
-        }
-        if (total > kMaxSamples) bad("sizes claim " + std::to_string(total) + " samples (more than 2^40)");
-    }
-    // encoding
-    {
-        const std::string e = lower(need("encoding"));
-        if (e == "raw")
-            encoding_ = Encoding::Raw;
-        else if (e == "gzip" || e == "gz") {
-#if defined(NORMALFLOW_HAS_ZLIB)
-            encoding_ = Encoding::Gzip;
 #else
-            bad("gzip encoding is not supported by this build (no zlib)");
+struct NrrdReader::Inflater {};
 #endif
-        } else if (e == "ascii" || e == "text" || e == "txt")
-            encoding_ = Encoding::Ascii;
-        else
-            bad("unsupported encoding \"" + e + "\" (expected raw, gzip or ascii)");
-    }
-    // endian
-    if (scalar_bytes(type_) > 1 && encoding_ != Encoding::Ascii) {
-        const auto it = fields_.find("endian");
-        if (it == fields_.end()) bad("missing required field \"endian\" for a multi-byte type");
-        const std::string e = lower(it->second);
-        bool little;
-        if (e == "little")
-            little = true;
-        else if (e == "big")
-            little = false;
-        else
-            bad("endian is \"" + it->second + "\", expected little or big");
-        swap_ = little != (std::endian::native == std::endian::little);
-    }
-    // skips
-    auto integer_field = [&](const char* a, const char* b) -> std::int64_t {
-        auto it = fields_.find(a);
-        if (it == fields_.end()) it = fields_.find(b);
-        if (it == fields_.end()) return 0;
-        char* end = nullptr;
-        errno = 0;
-        const long long x = std::strtoll(it->second.c_str(), &end, 10);
-        if (errno || end == it->second.c_str() || *end != '\0')
-            bad(std::string(a) + ": expected an integer, found \"" + it->second + "\"");
-        return x;
-    };
-    byte_skip_ = integer_field("byte skip", "byteskip");
-    line_skip_ = integer_field("line skip", "lineskip");
-    if (line_skip_ < 0) bad("line skip must be >= 0");
-    if (byte_skip_ < -1) bad("byte skip must be >= -1");
-    if (byte_skip_ == -1 && encoding_ != Encoding::Raw) bad("byte skip -1 is only allowed with raw encoding");
-}
 
-std::vector<double> NrrdReader::parse_numbers(const std::string& s, std::size_t expected, const char* field) {
-    std::vector<double> out;
-    const char* p = s.c_str();
-    while (*p) {
-        while (*p && std::isspace(static_cast<unsigned char>(*p))) ++p;
-        if (!*p) break;
-        char* end = nullptr;
-        const double x = std::strtod(p, &end);
-        if (end == p) bad(std::string(field) + ": expected numbers, found \"" + s + "\"");
-        out.push_back(x);
-        p = end;
-    }
-    if (expected && out.size() != expected)
-        bad(std::string(field) + ": expected " + std::to_string(expected) + " values, found " +
-            std::to_string(out.size()));
-    for (double x : out)
-        if (!std::isfinite(x)) bad(std::string(field) + ": non-finite value in \"" + s + "\"");
-    return out;
-}
-
-std::vector<std::optional<std::array<double, 3>>> NrrdReader::parse_vectors(const std::string& s) {
-    std::vector<std::optional<std::array<double, 3>>> out;
-    std::size_t i = 0;
-    auto skip = [&] {
-        while (i < s.size() && std::isspace(static_cast<unsigned char>(s[i]))) ++i;
-    };
-    for (;;) {
-        skip();
-        if (i >= s.size()) break;
-        if (s.compare(i, 4, "none") == 0) {
-            out.emplace_back();
-            i += 4;
-            continue;
-        }
-        if (s[i] != '(') bad("malformed vector list \"" + s + "\" (expected \"(x,y,z)\" or none)");
-        const std::size_t close = s.find(')', i);
-        if (close == std::string::npos) bad("malformed vector list \"" + s + "\" (missing ')')");
-        std::string inner = s.substr(i + 1, close - i - 1);
-        std::replace(inner.begin(), inner.end(), ',', ' ');
-        const auto v = parse_numbers(inner, 0, "vector");
-        if (v.size() != 3)
-            bad("vector \"" + s.substr(i, close - i + 1) + "\" has " + std::to_string(v.size()) +
-                " components, expected 3 (space dimension 3)");
-        out.push_back(std::array<double, 3>{v[0], v[1], v[2]});
-        i = close + 1;
-    }
-    return out;
-}
-
-NrrdGeometry NrrdReader::geometry() {
-    if (const auto it = fields_.find("space dimension"); it != fields_.end() && trim(it->second) != "3")
-        bad("space dimension is " + it->second + ", expected 3");
-    if (const auto it = fields_.find("space");
-        it != fields_.end() && lower(it->second).find("time") != std::string::npos)
-        bad("space \"" + it->second + "\" has a time axis; expected a 3-D space");
-    NrrdGeometry geo;
-    if (const auto it = fields_.find("space directions"); it != fields_.end()) {
-        const auto dirs = parse_vectors(it->second);
-        if (dirs.size() != 3) bad("space directions: expected 3 vectors, found " + std::to_string(dirs.size()));
-        for (int a = 0; a < 3; ++a) {
-            if (!dirs[std::size_t(a)])
-                bad("space directions: axis " + std::to_string(a) + " is \"none\"; expected 3 spatial axes");
-            const auto& d = *dirs[std::size_t(a)];
-            geo.axes[std::size_t(a)] = {d[0], d[1], d[2]};
-            const double n = norm(geo.axes[std::size_t(a)]);
-            if (!(n > 0) || !std::isfinite(n))
-                bad("space directions: axis " + std::to_string(a) + " has no length (" + it->second + ")");
-        }
-        geo.from = NrrdGeometry::From::Directions;
-        geo.text = it->second;
-    } else if (const auto sit = fields_.find("spacings"); sit != fields_.end()) {
-        const auto v = parse_numbers(sit->second, 3, "spacings");
-        for (int a = 0; a < 3; ++a) {
-            if (v[std::size_t(a)] == 0) bad("spacings: axis " + std::to_string(a) + " is 0");
-            geo.axes[std::size_t(a)] = Vec3d{};
-            geo.axes[std::size_t(a)][a] = v[std::size_t(a)];
-        }
-        if (const auto mit = fields_.find("axis mins"); mit != fields_.end()) {
-            const auto m = parse_numbers(mit->second, 3, "axis mins");
-            geo.origin = {m[0], m[1], m[2]};
-        }
-        geo.from = NrrdGeometry::From::Spacings;
-        geo.text = sit->second;
-    }
-    if (const auto it = fields_.find("space origin"); it != fields_.end()) {
-        const auto o = parse_vectors(it->second);
-        if (o.size() != 1 || !o[0]) bad("space origin: expected one vector \"(x,y,z)\", found \"" + it->second + "\"");
-        geo.origin = {(*o[0])[0], (*o[0])[1], (*o[0])[2]};
-    }
-    return geo;
-}
+NrrdReader::NrrdReader(const std::string& path, const char* who) : path_(path), who_(who) {}
+NrrdReader::~NrrdReader() = default;
 
 void NrrdReader::read_raw(void* dst, std::size_t bytes) {
     const std::size_t got = std::fread(dst, 1, bytes, f_.get());
@@ -501,6 +130,8 @@ void NrrdReader::read_ascii(double* dst, std::size_t count) {
     }
 }
 
+namespace {
+
 template <class T>
 void convert(const char* src, double* dst, std::size_t count, bool swap) {
     for (std::size_t i = 0; i < count; ++i) {
@@ -512,6 +143,8 @@ void convert(const char* src, double* dst, std::size_t count, bool swap) {
         dst[i] = double(v);
     }
 }
+
+}  // namespace
 
 void NrrdReader::read_samples(double* dst, std::size_t count) {
     if (encoding_ == Encoding::Ascii) {
@@ -741,6 +374,10 @@ ScalarImage NrrdReader::read_image() {
     return img;
 }
 
+}  // namespace detail
+
+namespace {
+
 std::string num(double x) {
     char buf[40];
     std::snprintf(buf, sizeof buf, "%.17g", x);
@@ -750,12 +387,14 @@ std::string num(double x) {
 }  // namespace
 
 Volume read_nrrd(const std::string& path, const VolumeReadOptions& opt) {
-    return NrrdReader(path, "read_nrrd").read_volume(opt);
+    return detail::NrrdReader(path, "read_nrrd").read_volume(opt);
 }
 
 Volume read_nrrd(const std::string& path) { return read_nrrd(path, VolumeReadOptions{}); }
 
-ScalarImage read_nrrd_image(const std::string& path) { return NrrdReader(path, "read_nrrd_image").read_image(); }
+ScalarImage read_nrrd_image(const std::string& path) {
+    return detail::NrrdReader(path, "read_nrrd_image").read_image();
+}
 
 void write_nrrd(const std::string& path, const Volume& v) {
     v.check("write_nrrd: " + path);
@@ -763,19 +402,20 @@ void write_nrrd(const std::string& path, const Volume& v) {
     const Placement& pl = g.placement;
     // The file's frame is the world: directions h · rotation columns, origin the world position of
     // sample (0, 0, 0). With the identity placement these are (h,0,0) (0,h,0) (0,0,h) and grid.origin.
-    std::string dirs, origin;
-    if (pl.is_identity()) {
-        const std::string h = num(g.voxel_size);
-        dirs = "(" + h + ",0,0) (0," + h + ",0) (0,0," + h + ")";
-        origin = "(" + num(g.origin.x) + "," + num(g.origin.y) + "," + num(g.origin.z) + ")";
-    } else {
-        for (int a = 0; a < 3; ++a) {
-            const Vec3d d = pl.rotation[std::size_t(a)] * g.voxel_size;
-            dirs += std::string(a ? " " : "") + "(" + num(d.x) + "," + num(d.y) + "," + num(d.z) + ")";
-        }
-        const Vec3d o = pl.point(g.origin);
-        origin = "(" + num(o.x) + "," + num(o.y) + "," + num(o.z) + ")";
+    // "(x,y,z)", appended piece by piece (GCC 12's -Wrestrict misreads a chain of + on temporaries here)
+    const auto vector = [](const Vec3d& v) {
+        std::string t = "(";
+        t.append(num(v.x)).append(",").append(num(v.y)).append(",").append(num(v.z)).append(")");
+        return t;
+    };
+    std::string dirs;
+    for (int a = 0; a < 3; ++a) {
+        if (a) dirs += ' ';
+        dirs += vector(pl.is_identity() ? Vec3d{a == 0 ? g.voxel_size : 0.0, a == 1 ? g.voxel_size : 0.0,
+                                                a == 2 ? g.voxel_size : 0.0}
+                                        : pl.rotation[std::size_t(a)] * g.voxel_size);
     }
+    const std::string origin = vector(pl.is_identity() ? g.origin : pl.point(g.origin));
     std::string hdr =
         "NRRD0004\n# Complete NRRD file format specification at:\n"
         "# http://teem.sourceforge.net/nrrd/format.html\n"
