@@ -30,6 +30,7 @@
 #include "pipeline/options.h"
 #include "pipeline/pipeline.h"
 #include "pipeline/report_json.h"
+#include "pipeline/run_file.h"
 
 namespace normalflow::cli {
 
@@ -123,66 +124,23 @@ struct InterruptOnly : Progress {
     bool should_stop() override { return interrupted(); }
 };
 
-/// Smooths one file into its output; its JSON line's "result": the run's report as smooth --json has it
-/// (run_report_json), with the input's format and counts and the output's counts.
-Json smooth_file(const Job& job, const BatchArgs& a, PipelineOptions opt, std::size_t& triangles) {
+/// Smooths one file into its output: the library's run_file, as `normalflow smooth` runs it; its report is the
+/// JSON line's "result".
+FileRun smooth_file(const Job& job, const RunOptions& run, std::size_t memory_share) {
     InterruptOnly progress;
-    Mesh result;
-    PipelineReport report;
-    Json j = Json::object();
-    if (is_volume_path(job.input)) {
-        VolumeInput vin;
-        try {
-            vin = volume_input(a.run);
-        } catch (const InvalidInput& e) {
-            throw InvalidInput(job.input + ": " + e.what());
-        }
-        opt.scan.voxel_size = 0;
-        VolumeReadInfo info;
-        Volume v = read_volume(job.input, vin, &info);
-        set_volume_length_scale(opt, info);
-        PipelineResult r = smooth_volume_input(v, opt, &progress);
-        result = std::move(r.mesh);
-        report = std::move(r.report);
-        j = run_report_json(Command::Smooth, a.run, report, /*scan_converted=*/false);
-        j.set("input", Json::object().set("format", info.format).set("surface", info.surface));
-    } else {
-        try {
-            refuse_volume_options(a.run);
-        } catch (const InvalidInput& e) {
-            throw InvalidInput(job.input + ": " + e.what());
-        }
-        ReadInfo info;
-        const Mesh mesh = read_mesh(job.input, &info);
-        PipelineResult r = smooth_mesh(mesh, opt, &progress);
-        result = std::move(r.mesh);
-        report = std::move(r.report);
-        j = run_report_json(Command::Smooth, a.run, report);
-        j.set("input", Json::object()
-                           .set("format", info.format)
-                           .set("vertices", mesh.positions.size())
-                           .set("triangles", mesh.triangles.size()));
-    }
     fs::create_directories(fs::path(job.output).parent_path());
-    WriteOptions wo;
-    wo.glb = GlbEncoding::Draco;
-    wo.draco = a.run.draco;
-    write_mesh(job.output, result, wo);
-    triangles = result.triangles.size();
-    j.set("output", Json::object().set("vertices", result.positions.size()).set("triangles", triangles));
-    return j;
+    return run_file(Command::Smooth, job.input, job.output, run, &progress, memory_share);
 }
 
 int run_batch(const BatchArgs& a) {
     Stopwatch total;
-    PipelineOptions opt = pipeline_options(a.run, Command::Smooth);
-    validate(opt);
+    validate(pipeline_options(a.run, Command::Smooth));
     if (mesh_format_from_path("x." + a.format) == MeshFormat::Unknown)
         throw InvalidInput("--format " + a.format + ": expected ply, obj, off, stl, glb or drc");
     const std::vector<Job> jobs = plan(a);
     const unsigned workers = std::max(1u, std::min<unsigned>(a.jobs, unsigned(jobs.size())));
     // Files at once share the memory: each run is checked against its part of what is available.
-    if (opt.max_memory_bytes == 0) opt.max_memory_bytes = available_memory_bytes() / workers;
+    const std::size_t memory_share = available_memory_bytes() / workers;
 
     std::mutex out_mutex;
     std::size_t done = 0, ok = 0, skipped = 0, failed = 0;
@@ -218,11 +176,11 @@ int run_batch(const BatchArgs& a) {
             }
             Stopwatch clock;
             try {
-                std::size_t triangles = 0;
-                Json j = smooth_file(job, a, opt, triangles);
+                FileRun f = smooth_file(job, a.run, memory_share);
+                const std::size_t triangles = f.triangles;
                 const double seconds = clock.seconds();
                 Json l = line(job, "ok", seconds);
-                l.set("triangles", triangles).set("result", std::move(j));
+                l.set("triangles", triangles).set("result", std::move(f.report));
                 char text[64];
                 std::snprintf(text, sizeof text, " (%zu triangles, %.1f s)", triangles, seconds);
                 report_line(job, "ok", std::move(l), text);
