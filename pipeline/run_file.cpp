@@ -34,6 +34,22 @@ void begin(Progress* p, const char* stage) {
     if (p) p->begin(stage);
 }
 
+/// A mesh file as read, and the seconds it took.
+struct MeshRead {
+    Mesh mesh;
+    ReadInfo info;
+    double seconds = 0;
+};
+
+MeshRead read_input(const std::string& input, Progress* p) {
+    begin(p, "read");
+    Stopwatch clock;
+    MeshRead in;
+    in.mesh = read_mesh(input, &in.info);
+    in.seconds = clock.seconds();
+    return in;
+}
+
 /// "N triangles", and where the compact default decimated the result, from how many (the line says what was done).
 std::string triangles_note(const Mesh& m, const PipelineReport& r) {
     std::string s = std::to_string(m.triangles.size()) + " triangles";
@@ -128,18 +144,17 @@ void stop_notes(const PipelineOptions& opt, const PipelineReport& r, FileRun& f)
 FileRun voxelize_file(const std::string& input, const std::string& output, const RunOptions& run,
                       const PipelineOptions& opt, Progress* p) {
     if (!is_volume_output_path(output)) throw InvalidInput(output + ": the output must be a .vdb or .nrrd file");
-    begin(p, "read");
-    Stopwatch clock;
-    ReadInfo info;
-    const Mesh mesh = read_mesh(input, &info);
-    const double t_read = clock.lap();
+    const MeshRead in = read_input(input, p);
+    const Mesh& mesh = in.mesh;
+    const ReadInfo& info = in.info;
+    const double t_read = in.seconds;
     PipelineReport r;
     const Volume v = naming(input, [&] { return mesh_to_volume(mesh, opt, &r, p); });
     FileRun f;
     f.report = mesh_report_json(Command::Voxelize, run, r, t_read, info);
     f.report.set("input", mesh_input_json(input, info, mesh, r));
     f.report["voxelize"].set("band_half_width", v.half_width).set("memory_bytes", v.memory_bytes());
-    clock.lap();
+    Stopwatch clock;
     begin(p, "write");
     write_volume(output, v);
     f.report["seconds"].set("write", clock.seconds());
@@ -227,11 +242,10 @@ FileRun mesh_file(Command c, const std::string& input, const std::string& output
     if (c == Command::Smooth && is_volume_path(input))
         return smooth_volume_file(input, output, run, opt, p, volume_out);
     naming(input, [&] { refuse_volume_options(run); });
-    begin(p, "read");
-    Stopwatch clock;
-    ReadInfo info;
-    const Mesh mesh = read_mesh(input, &info);
-    const double t_read = clock.lap();
+    const MeshRead in = read_input(input, p);
+    const Mesh& mesh = in.mesh;
+    const ReadInfo& info = in.info;
+    const double t_read = in.seconds;
     FileRun f;
     if (volume_out) {  // the smoothed volume itself: scan conversion and the engine, no extraction
         PipelineReport r;
