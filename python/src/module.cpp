@@ -73,12 +73,14 @@ std::vector<Record> records(const py::array_t<Scalar, py::array::c_style | py::a
 }
 
 Mesh make_mesh(const py::array_t<float, py::array::c_style | py::array::forcecast>& vertices,
-               const py::array& face_array,
+               const py::object& face_object,
                const std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>>& normals,
                const std::optional<py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>>& colors,
                const std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>>& texcoords) {
     Mesh m;
     m.positions = records<float, 3, Vec3f>(vertices, "vertices");
+    const py::array face_array = py::array::ensure(face_object);  // a list of lists too, as numpy reads it
+    if (!face_array) throw InvalidInput("faces: expected an array of shape (m, 3) of vertex indices");
     const char kind = face_array.dtype().kind();
     if (kind != 'i' && kind != 'u' && face_array.size() > 0)
         throw InvalidInput("faces: expected integer vertex indices, got an array of " +

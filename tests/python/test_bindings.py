@@ -185,6 +185,7 @@ def test_bad_input_is_one_clear_error():
         nf.smooth(v, f, iterations=True)
     with pytest.raises(ValueError, match="faces: expected integer vertex indices, got an array of float64"):
         nf.Mesh(v, f.astype(np.float64))
+    assert len(nf.Mesh(v.tolist(), f.tolist()).faces) == len(f)  # lists are arrays
     with pytest.raises(TypeError, match="unexpected keyword argument 'resolutoin'"):
         nf.smooth(v, f, resolutoin=64)
     with pytest.raises(OSError, match="no_such_file.ply"):
