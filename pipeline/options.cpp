@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <type_traits>
 
 #include "core/errors.h"
@@ -78,7 +79,9 @@ OptionSpec choices(OptionSpec s, std::vector<OptionChoice> c) {
 }
 OptionSpec bytes(OptionSpec s) {
     s.kind = OptionKind::Bytes;
-    return positive(std::move(s), "auto");
+    s = positive(std::move(s), "auto");
+    s.hi = 0x1p62;  // 4 EiB: any memory, and a size_t
+    return s;
 }
 
 std::string shortest(double x, bool single) {
@@ -320,6 +323,7 @@ double number_of(const OptionSpec& s, const RunOptions& o) {
 
 bool in_range(const OptionSpec& s, double x) {
     if (x == 0 && !s.zero.empty()) return true;
+    if (s.single && !(std::abs(x) <= std::numeric_limits<float>::max())) return false;  // a float field holds it
     return (s.lo_open ? x > s.lo : x >= s.lo) && x <= s.hi && std::isfinite(x);
 }
 

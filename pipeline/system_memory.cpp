@@ -59,7 +59,7 @@ std::size_t parse_bytes(const std::string& text) {
         unit = 1024.0 * 1024 * 1024;
     else if (rest == "T" || rest == "t")
         unit = 1024.0 * 1024 * 1024 * 1024;
-    if (end == text.c_str() || unit == 0 || !(value > 0) || !std::isfinite(value))
+    if (end == text.c_str() || unit == 0 || !(value > 0) || !(value * unit < 0x1p62))  // 4 EiB, a size_t
         throw InvalidInput("'" + text + "' is not a size (examples: 4G, 512M, 100000)");
     return static_cast<std::size_t>(value * unit);
 }

@@ -76,7 +76,9 @@ TEST(Options, EveryValueIsReadBackAsWrittenAndChangesOnlyItsField) {
                     break;
                 case OptionKind::Bytes: other = "3G"; break;
                 case OptionKind::OptionalReal: other = "2.5"; break;
-                default: other = std::to_string(int(s.hi < 1e9 ? s.hi : s.lo + 2)); break;
+                default:  // the top of the range, or a value above its bottom (2 where it has none)
+                    other = std::to_string(int(s.hi < 1e9 ? s.hi : s.lo > -1e9 ? s.lo + 2 : 2));
+                    break;
             }
             set_option(s, o, other);
             EXPECT_NE(option_text(s, o), option_text(s, defaults)) << s.name << " = " << other;
@@ -106,6 +108,8 @@ TEST(Options, OutOfRangeAndMistypedValuesAreRefusedSayingWhatIsExpected) {
     refuses("sigma-range", "nan", "a number > 0");
     refuses("iterations", "-1", "an integer in [1, 10000], or auto");
     refuses("max-memory", "4Q", "a size");
+    refuses("max-memory", "1e300", "a size");         // no size_t holds it
+    refuses("sigma-range", "1e300", "a number > 0");  // no float holds it
     refuses("repair", "maybe", "true or false");
     refuses("target-faces", "3", "or none");
     // the words of 0
