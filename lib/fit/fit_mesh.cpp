@@ -13,65 +13,42 @@
 
 #include "core/errors.h"
 #include "extract/volume_sampler.h"
+#include "fit/weld.h"
 
 namespace normalflow {
 
+using detail::boundary_vertices;
+using detail::weld;
+
 namespace {
 
-struct PositionHash {
-    std::size_t operator()(const Vec3f& p) const {
-        std::uint32_t b[3];
-        static_assert(sizeof(b) == sizeof(float) * 3);
-        const float f[3] = {p.x == 0.0f ? 0.0f : p.x, p.y == 0.0f ? 0.0f : p.y, p.z == 0.0f ? 0.0f : p.z};
-        std::memcpy(b, f, sizeof(b));
-        std::size_t h = b[0];
-        h = h * 0x9E3779B97F4A7C15ull ^ b[1];
-        h = h * 0x9E3779B97F4A7C15ull ^ b[2];
-        return h;
-    }
-};
-struct PositionEqual {
-    bool operator()(const Vec3f& a, const Vec3f& b) const { return a.x == b.x && a.y == b.y && a.z == b.z; }
-};
-
-/// group[i] = the welded vertex of position i (coincident positions share one, numbered in order of
-/// first occurrence); returns the number of groups.
-std::size_t weld(const Mesh& m, std::vector<std::uint32_t>& group) {
-    std::unordered_map<Vec3f, std::uint32_t, PositionHash, PositionEqual> first;
-    first.reserve(m.positions.size());
-    group.resize(m.positions.size());
-    for (std::size_t i = 0; i < m.positions.size(); ++i)
-        group[i] = first.emplace(m.positions[i], std::uint32_t(first.size())).first->second;
-    return first.size();
-}
-
-/// The welded triangles' edges as sorted pairs with their face counts: true for each welded vertex
-/// on an edge of exactly one face.
-std::vector<char> boundary_vertices(const Mesh& m, const std::vector<std::uint32_t>& group, std::size_t n) {
-    std::vector<std::uint64_t> edges;
-    edges.reserve(m.triangles.size() * 3);
-    for (const Tri& t : m.triangles)
-        for (int e = 0; e < 3; ++e) {
-            std::uint32_t a = group[t[std::size_t(e)]], b = group[t[std::size_t((e + 1) % 3)]];
-            if (a == b) continue;  // a degenerate edge
-            if (a > b) std::swap(a, b);
-            edges.push_back(std::uint64_t(a) << 32 | b);
-        }
-    std::sort(edges.begin(), edges.end());
-    std::vector<char> on(n, 0);
-    for (std::size_t i = 0; i < edges.size();) {
-        std::size_t j = i;
-        while (j < edges.size() && edges[j] == edges[i]) ++j;
-        if (j - i == 1) {
-            on[std::size_t(edges[i] >> 32)] = 1;
-            on[std::size_t(edges[i] & 0xffffffffu)] = 1;
-        }
-        i = j;
-    }
-    return on;
+/// The volume's unit normal at c: the normal map's where it has one, else ∇φ's; zero outside the band.
+Vec3d volume_normal(const detail::VolumeSampler& S, const NormalMap* targets, const Vec3d& c) {
+    Vec3d n(0, 0, 0);
+    if (S.outside_band(c)) return n;
+    if (targets && detail::sample_normal_map(*targets, c, n)) return n;
+    Vec3d g;
+    S.phi(c, &g);
+    const double len = norm(g);
+    return len > 1e-12 ? g / len : Vec3d(0, 0, 0);
 }
 
 }  // namespace
+
+std::vector<Vec3d> volume_normals_at_faces(const Mesh& m, const Volume& v, const NormalMap* targets) {
+    v.check("volume_normals_at_faces");
+    const detail::VolumeSampler S(v);
+    std::vector<Vec3d> out(m.triangles.size());
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, out.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t f = r.begin(); f != r.end(); ++f) {
+                const Tri& t = m.triangles[f];
+                const Vec3d c = (Vec3d(m.positions[t[0]]) + Vec3d(m.positions[t[1]]) + Vec3d(m.positions[t[2]])) / 3.0;
+                out[f] = volume_normal(S, targets, c);
+            }
+        });
+    return out;
+}
 
 bool has_open_boundary(const Mesh& m) {
     std::vector<std::uint32_t> group;
@@ -208,18 +185,8 @@ FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& o, cons
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nf, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t f = r.begin(); f != r.end(); ++f) {
                 const Tri& t = m.triangles[f];
-                const Vec3d c = (x[group[t[0]]] + x[group[t[1]]] + x[group[t[2]]]) / 3.0;
-                if (S.outside_band(c)) continue;
-                if (targets && detail::sample_normal_map(*targets, c, normal[f])) {
-                    usable[f] = 1;
-                    continue;
-                }
-                Vec3d g;
-                S.phi(c, &g);
-                const double len = norm(g);
-                if (!(len > 1e-12)) continue;
-                normal[f] = g / len;
-                usable[f] = 1;
+                normal[f] = volume_normal(S, targets, (x[group[t[0]]] + x[group[t[1]]] + x[group[t[2]]]) / 3.0);
+                usable[f] = norm(normal[f]) > 0;
             }
         });
         // vertex → faces (CSR), faces in index order

@@ -7,6 +7,7 @@
 /// paper's two steps once more, on the mesh: the normals are given, the positions follow them).
 
 #include <cstddef>
+#include <vector>
 
 #include "core/mesh.h"
 #include "core/volume.h"
@@ -63,6 +64,12 @@ struct FitReport {
 /// does not depend on the thread count.
 FitReport fit_mesh_to_volume(Mesh& m, const Volume& v, const FitOptions& options = {},
                              const NormalMap* targets = nullptr);
+
+/// The volume's normal at each face's centroid: with targets (the engine's last filtered normal map) its
+/// interpolated normal, else (or where the map has none) the normalised ∇φ; zero where the centroid is
+/// outside the band or the gradient vanishes. The sign is the volume's (outward).
+/// Cost: O(F) lookups, TBB parallel.
+std::vector<Vec3d> volume_normals_at_faces(const Mesh& m, const Volume& v, const NormalMap* targets = nullptr);
 
 /// Whether m has an edge of exactly one face once coincident positions are welded (an open
 /// surface: a scan, a sheet, a mesh with holes).

@@ -1,0 +1,68 @@
+#pragma once
+/// \file face_filter.h
+/// A face-normal filter on the user's own mesh, guided by the volume: the last step of a kept result.
+/// The volume's filtered normals are smooth, consistent and free of the mesh's tangles, but the grid
+/// rounds every crease over about a voxel; the mesh's own faces can show a crease as sharp as the
+/// input's tessellation allows. This filter takes the best of both (after Zhang et al. 2015, "Guided
+/// mesh normal filtering", and Sun et al. 2007's vertex update): each face's normal is filtered over
+/// its neighbours with a joint bilateral weight on a guidance normal, and the vertices follow.
+
+#include <cstddef>
+#include <vector>
+
+#include "core/mesh.h"
+
+namespace normalflow {
+
+/// Options for filter_faces.
+struct FaceFilterOptions {
+    int normal_steps = 1;   ///< >= 0: rounds of guidance, joint bilateral filter and vertex update; 0: none
+    int vertex_steps = 10;  ///< >= 0: vertex-update iterations per round
+    /// Range scale of the joint bilateral weight exp(−|g_f − g_k|² / 2σ_r²) on the guidance normals
+    /// (a chord length, 2 sin(θ/2) for an angle θ between them; 0.35 as the engine's sigma_range). > 0.
+    double sigma_r = 0.35;
+    /// Spatial scale of the weight exp(−|c_f − c_k|² / 2σ_s²), a multiple of the mean distance between
+    /// the centroids of faces that share a vertex. > 0.
+    double sigma_s = 1.0;
+    /// Neighbourhood of the filter, in rings of faces (the faces sharing a vertex with the face, then
+    /// with those, ...). >= 1.
+    int rings = 1;
+    /// The guidance of a face is the area-weighted mean of the base normals (the given guidance, else
+    /// the current normals) over a patch: the face's vertex ring, or, where a neighbour's vertex ring is
+    /// clearly more consistent (Zhang et al.'s patch consistency: the largest distance of a normal from
+    /// the patch's mean), that one. A patch that straddles a crease is not consistent, one on a side of
+    /// it is: the guidance stays sharp at a crease and is the local mean elsewhere. When false, the
+    /// guidance is the base normal itself.
+    bool patch_guidance = true;
+    /// "Clearly": a neighbour's patch replaces the face's own when its spread is below this fraction of
+    /// the own patch's. On a curved surface every patch is about as consistent, and a neighbour's
+    /// normal is tilted by the curvature: 1 is Zhang et al.'s choice of the most consistent patch,
+    /// smaller keeps the own patch unless a crease runs through it. In (0, 1].
+    double own_patch_bias = 0.35;
+};
+
+/// What filter_faces did.
+struct FaceFilterReport {
+    std::size_t faces = 0;           ///< faces filtered (non-degenerate)
+    std::size_t reverted_moves = 0;  ///< vertex moves undone because a face would have turned over
+};
+
+/// Filters m's face normals and moves its vertices to follow them; the vertices, faces and their order
+/// stay. Each round: the guidance (above) of every face, the joint bilateral filter of the faces'
+/// current normals over their neighbourhood weighted by area, distance and the guidance's agreement,
+/// then vertex_steps iterations of Sun et al.'s vertex update toward the filtered normals.
+/// guidance (optional, one unit normal per face, zero where unknown) is where each face should point:
+/// the volume's normal at its centroid (volume_normals_at_faces), smooth and consistent but rounded
+/// over a voxel at a crease, which the patch guidance sharpens. held (optional, one flag per position)
+/// marks positions that do not move; vertices on an open boundary never move. filtered_normals (optional)
+/// receives the last round's filtered normals, one per face (a measurement: how good the target was).
+/// No face turns over: a vertex move that would turn a face to more than 90° from its filtered normal
+/// is undone.
+/// \throw InvalidInput for options out of range or sizes that do not match.
+/// Cost: O(F · k · normal_steps + F · vertex_steps · normal_steps) for k faces in a neighbourhood;
+/// TBB-parallel, the result does not depend on the thread count.
+FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& options = {},
+                              const std::vector<Vec3d>* guidance = nullptr, const std::vector<char>* held = nullptr,
+                              std::vector<Vec3d>* filtered_normals = nullptr);
+
+}  // namespace normalflow

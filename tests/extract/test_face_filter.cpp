@@ -1,0 +1,187 @@
+// Tests of lib/fit/face_filter.h: the kept mesh's face filter guided by the volume's normals.
+#include "fit/face_filter.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include "../metrics/metric_test_meshes.h"
+#include "core/errors.h"
+#include "metrics/noise.h"
+
+namespace normalflow {
+namespace {
+
+constexpr double kDeg = 57.29577951308232;
+
+Vec3d unit_normal(const Mesh& m, std::size_t f) { return normalized(face_area_vector(m, m.triangles[f])); }
+
+double angle_deg(const Vec3d& a, const Vec3d& b) { return std::acos(std::clamp(dot(a, b), -1.0, 1.0)) * kDeg; }
+
+/// Mean angle of m's faces to the reference's faces (same triangles).
+double mean_face_angle(const Mesh& m, const Mesh& reference) {
+    double sum = 0;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) sum += angle_deg(unit_normal(m, f), unit_normal(reference, f));
+    return sum / double(m.triangles.size());
+}
+
+/// A guidance as the volume gives it: the true normals, rounded over `bevel` at the cube's edges (each face's
+/// normal is the mean of the true normals of the sides within bevel of its centroid, as a grid's gradient
+/// blends them within a voxel of a crease).
+std::vector<Vec3d> bevelled_cube_guidance(const Mesh& clean, const Mesh& m, double bevel) {
+    std::vector<Vec3d> g(m.triangles.size());
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+        const Tri& t = clean.triangles[f];
+        const Vec3d c =
+            (Vec3d(clean.positions[t[0]]) + Vec3d(clean.positions[t[1]]) + Vec3d(clean.positions[t[2]])) / 3.0;
+        Vec3d sum(0, 0, 0);
+        for (int a = 0; a < 3; ++a)
+            if (std::abs(c[a]) > 1.0 - bevel) sum[a] = c[a] > 0 ? 1.0 : -1.0;
+        g[f] = normalized(sum);
+    }
+    return g;
+}
+
+TEST(FaceFilter, NoisyCubeGuidedByABevelledNormalFieldComesBackFlatAndSharp) {
+    const Mesh clean = test::subdivided_cube(20);
+    Mesh noisy = clean;
+    NoiseOptions n;
+    n.sigma = 0.05;  // what is left after the fit to the volume
+    add_noise(noisy, n);
+    // the triangles with an edge on the cube's edges (centroids a third of an edge away), as a voxel's bevel
+    const std::vector<Vec3d> guide = bevelled_cube_guidance(clean, noisy, 0.04);
+    const double before = mean_face_angle(noisy, clean);
+    FaceFilterOptions o;
+    Mesh m = noisy;
+    const FaceFilterReport r = filter_faces(m, o, &guide);
+    EXPECT_EQ(r.faces, clean.triangles.size());
+    EXPECT_EQ(m.triangles, clean.triangles);
+    const double after = mean_face_angle(m, clean);
+    EXPECT_LT(after, 0.7 * before) << before << " -> " << after;
+    // the faces along the edges: their guidance is rounded (45° off), the filter's patch guidance is not
+    double edge_sum = 0, edge_guide = 0;
+    std::size_t edge_faces = 0;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+        const Vec3d truth = unit_normal(clean, f);
+        if (angle_deg(guide[f], truth) < 1) continue;
+        edge_sum += angle_deg(unit_normal(m, f), truth);
+        edge_guide += angle_deg(guide[f], truth);
+        ++edge_faces;
+    }
+    ASSERT_GT(edge_faces, 100u);
+    const double sharp = edge_sum / double(edge_faces);
+    EXPECT_LT(sharp, 0.35 * edge_guide / double(edge_faces));
+    // without the patch guidance the bevel stays in the faces
+    Mesh plain = noisy;
+    o.patch_guidance = false;
+    filter_faces(plain, o, &guide);
+    double plain_sum = 0;
+    for (std::size_t f = 0; f < m.triangles.size(); ++f)
+        if (angle_deg(guide[f], unit_normal(clean, f)) >= 1)
+            plain_sum += angle_deg(unit_normal(plain, f), unit_normal(clean, f));
+    EXPECT_GT(plain_sum / double(edge_faces), 1.5 * sharp);
+}
+
+TEST(FaceFilter, NoFaceTurnsOverUnderHeavyNoiseAndTheResultIsThreadIndependent) {
+    const Mesh clean = test::subdivided_cube(10);
+    Mesh noisy = clean;
+    NoiseOptions n;
+    n.sigma = 0.6;
+    n.direction = NoiseDirection::Random;  // moves vertices along the surface too: tangled triangles
+    add_noise(noisy, n);
+    std::vector<Vec3d> guide(clean.triangles.size());
+    for (std::size_t f = 0; f < guide.size(); ++f) guide[f] = unit_normal(clean, f);
+    std::vector<char> turned(clean.triangles.size());
+    for (std::size_t f = 0; f < guide.size(); ++f) turned[f] = dot(unit_normal(noisy, f), guide[f]) <= 0;
+    FaceFilterOptions o;
+    o.normal_steps = 4;
+    Mesh one = noisy, two = noisy;
+    {
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+        filter_faces(one, o, &guide);
+    }
+    {
+        const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+        filter_faces(two, o, &guide);
+    }
+    EXPECT_EQ(one.positions, two.positions);
+    for (std::size_t f = 0; f < guide.size(); ++f)
+        if (!turned[f]) {
+            EXPECT_GT(dot(face_area_vector(one, one.triangles[f]), guide[f]), 0.0) << f;
+        }
+    EXPECT_LT(mean_face_angle(one, clean), mean_face_angle(noisy, clean));
+}
+
+TEST(FaceFilter, OpenBoundaryAndHeldVerticesStayAndCopiesMoveTogether) {
+    // one side of the cube, open; its positions duplicated per triangle (a soup): the copies are one vertex
+    const Mesh cube = test::subdivided_cube(6);
+    Mesh side;
+    for (const Tri& t : cube.triangles) {
+        const Vec3d c = (Vec3d(cube.positions[t[0]]) + Vec3d(cube.positions[t[1]]) + Vec3d(cube.positions[t[2]])) / 3.0;
+        if (c.z < 0.999) continue;
+        const auto base = std::uint32_t(side.positions.size());
+        for (std::uint32_t v : t) side.positions.push_back(cube.positions[v]);
+        side.triangles.push_back({base, base + 1, base + 2});
+    }
+    Mesh noisy = side;
+    for (std::size_t i = 0; i < noisy.positions.size(); ++i) {
+        const Vec3f p = noisy.positions[i];
+        noisy.positions[i].z += 0.05f * std::sin(13.0f * p.x + 7.0f * p.y);  // the same for every copy
+    }
+    std::vector<char> held(noisy.positions.size(), 0);
+    std::size_t centre = 0;
+    for (std::size_t i = 0; i < noisy.positions.size(); ++i)
+        if (std::abs(noisy.positions[i].x) < 1e-6f && std::abs(noisy.positions[i].y) < 1e-6f) held[centre = i] = 1;
+    Mesh m = noisy;
+    filter_faces(m, {}, nullptr, &held);
+    bool moved_inside = false;
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        const Vec3f p = noisy.positions[i];
+        const bool on_rim = std::abs(std::abs(p.x) - 1.0f) < 1e-6f || std::abs(std::abs(p.y) - 1.0f) < 1e-6f;
+        if (on_rim || (p.x == noisy.positions[centre].x && p.y == noisy.positions[centre].y))
+            EXPECT_EQ(m.positions[i], noisy.positions[i]) << i;
+        else
+            moved_inside = moved_inside || m.positions[i] != noisy.positions[i];
+        for (std::size_t j = 0; j < i; ++j)
+            if (noisy.positions[j] == noisy.positions[i]) {
+                EXPECT_EQ(m.positions[j], m.positions[i]);
+            }
+    }
+    EXPECT_TRUE(moved_inside);
+}
+
+TEST(FaceFilter, BadInput) {
+    Mesh cube = test::subdivided_cube(2);
+    FaceFilterOptions o;
+    o.rings = 0;
+    EXPECT_THROW(filter_faces(cube, o), InvalidInput);
+    o = {};
+    o.own_patch_bias = 0;
+    EXPECT_THROW(filter_faces(cube, o), InvalidInput);
+    o = {};
+    o.sigma_r = std::nan("");
+    EXPECT_THROW(filter_faces(cube, o), InvalidInput);
+    const std::vector<Vec3d> short_guide(3);
+    EXPECT_THROW(filter_faces(cube, {}, &short_guide), InvalidInput);
+    const std::vector<char> short_held(2);
+    EXPECT_THROW(filter_faces(cube, {}, nullptr, &short_held), InvalidInput);
+    Mesh bad = cube;
+    bad.triangles[0][0] = 9999;
+    EXPECT_THROW(filter_faces(bad), InvalidInput);
+    // zero rounds: nothing moves; a degenerate face is skipped, not a crash
+    o = {};
+    o.normal_steps = 0;
+    Mesh same = cube;
+    filter_faces(same, o);
+    EXPECT_EQ(same.positions, cube.positions);
+    Mesh degenerate = cube;
+    degenerate.triangles[0] = {degenerate.triangles[0][0], degenerate.triangles[0][0], degenerate.triangles[0][1]};
+    EXPECT_EQ(filter_faces(degenerate).faces, cube.triangles.size() - 1);
+}
+
+}  // namespace
+}  // namespace normalflow
