@@ -80,6 +80,53 @@ double mean_edge_length(const Mesh& m) {
     return mean_length(w, unique_edges(w));
 }
 
+NoiseEstimate estimate_noise(const Mesh& m) {
+    const Mesh w = weld_exact(m);
+    NoiseEstimate r;
+    const std::size_t nv = w.positions.size();
+    // every edge once per face, sorted: an edge of one face is on an open boundary
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> all;
+    all.reserve(3 * w.triangles.size());
+    std::vector<Vec3d> normal(nv);
+    for (const Tri& t : w.triangles) {
+        const Vec3d n = face_area_vector(w, t);
+        for (int k = 0; k < 3; ++k) {
+            normal[t[std::size_t(k)]] += n;
+            const std::uint32_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+            if (a != b) all.emplace_back(std::min(a, b), std::max(a, b));
+        }
+    }
+    std::sort(all.begin(), all.end());
+    std::vector<char> boundary(nv, 0);
+    std::vector<Vec3d> sum(nv);
+    std::vector<std::uint32_t> count(nv, 0);
+    double length = 0.0;
+    std::size_t edges = 0;
+    for (std::size_t i = 0; i < all.size();) {
+        std::size_t j = i;
+        while (j < all.size() && all[j] == all[i]) ++j;
+        const auto [a, b] = all[i];
+        if (j - i == 1) boundary[a] = boundary[b] = 1;
+        sum[a] += Vec3d(w.positions[b]);
+        sum[b] += Vec3d(w.positions[a]);
+        ++count[a], ++count[b];
+        length += norm(Vec3d(w.positions[a]) - Vec3d(w.positions[b]));
+        ++edges;
+        i = j;
+    }
+    r.mean_edge_length = edges ? length / double(edges) : 0.0;
+    double energy = 0.0;
+    for (std::size_t v = 0; v < nv; ++v) {
+        const double len = norm(normal[v]);
+        if (boundary[v] || count[v] < 3 || !(len > 0)) continue;
+        const double d = dot(Vec3d(w.positions[v]) - sum[v] / double(count[v]), normal[v] / len);
+        energy += d * d / (1.0 + 1.0 / double(count[v]));
+        ++r.vertices;
+    }
+    r.sigma = r.vertices ? std::sqrt(energy / double(r.vertices)) : 0.0;
+    return r;
+}
+
 NoiseReport add_noise(Mesh& m, const NoiseOptions& opt) {
     if (m.triangles.empty()) throw InvalidInput("add_noise: mesh has no triangles");
     if (!(opt.sigma >= 0) || !std::isfinite(opt.sigma))

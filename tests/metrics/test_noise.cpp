@@ -1,4 +1,5 @@
-// Tests of lib/metrics/noise.h: deterministic for a seed, the requested sigma, the requested kind/direction.
+// Tests of lib/metrics/noise.h: deterministic for a seed, the requested sigma, the requested kind/direction;
+// the estimate of a mesh's noise recovers it.
 #include "metrics/noise.h"
 
 #include <gtest/gtest.h>
@@ -133,6 +134,59 @@ TEST(AddNoise, BadInput) {
     } catch (const InvalidInput& e) {
         EXPECT_NE(std::string(e.what()).find("add_noise"), std::string::npos) << e.what();
     }
+}
+
+TEST(EstimateNoise, RecoversGaussianSigmaAlongTheNormals) {
+    const Mesh sphere = test::icosphere(1.0, 5);
+    const NoiseEstimate clean = estimate_noise(sphere);
+    EXPECT_EQ(clean.vertices, sphere.positions.size());  // closed: every vertex counts
+    EXPECT_NEAR(clean.mean_edge_length, mean_edge_length(sphere), 1e-12);
+    // the sphere's curvature alone: ℓ²κ/4 with κ = 1, about 0.005 of an edge here
+    EXPECT_LT(clean.sigma, 0.02 * clean.mean_edge_length);
+    for (double sigma : {0.1, 0.3, 0.6}) {
+        Mesh m = sphere;
+        NoiseOptions o;
+        o.sigma = sigma;
+        const NoiseReport r = add_noise(m, o);
+        EXPECT_NEAR(estimate_noise(m).sigma, r.sigma_world, 0.1 * r.sigma_world) << sigma;
+    }
+}
+
+TEST(EstimateNoise, ImpulsiveNoiseCountsWithItsEnergy) {
+    const Mesh sphere = test::icosphere(1.0, 5);
+    Mesh m = sphere;
+    NoiseOptions o;
+    o.sigma = 0.5;
+    o.kind = NoiseKind::Impulsive;
+    o.impulsive_fraction = 0.25;
+    const NoiseReport r = add_noise(m, o);
+    // a quarter of the vertices moved by σ: the energy of σ/2 spread over all of them
+    EXPECT_NEAR(estimate_noise(m).sigma, 0.5 * r.sigma_world, 0.15 * r.sigma_world);
+}
+
+TEST(EstimateNoise, SkipsOpenBoundariesAndScalesWithTheModel) {
+    // a flat grid: its interior is exactly planar, its boundary (where the neighbours' centroid is off
+    // the vertex) would read as noise if it were counted
+    Mesh grid;
+    const int n = 20;
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) grid.positions.push_back(Vec3f(float(i), float(j), 0.0f));
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const std::uint32_t a = std::uint32_t(j * (n + 1) + i), b = a + 1, c = a + std::uint32_t(n + 1), d = c + 1;
+            grid.triangles.push_back({a, b, d});
+            grid.triangles.push_back({a, d, c});
+        }
+    const NoiseEstimate flat = estimate_noise(grid);
+    EXPECT_EQ(flat.vertices, std::size_t((n - 1) * (n - 1)));
+    EXPECT_EQ(flat.sigma, 0.0);
+    const Mesh sphere = test::icosphere(1.0, 4);
+    Mesh noisy = sphere;
+    add_noise(noisy, {});
+    EXPECT_NEAR(estimate_noise(test::scaled(noisy, 10.0)).sigma, 10.0 * estimate_noise(noisy).sigma,
+                1e-5 * estimate_noise(noisy).sigma * 10.0);
+    Mesh empty;
+    EXPECT_EQ(estimate_noise(empty).sigma, 0.0);
 }
 
 }  // namespace
