@@ -175,7 +175,9 @@ std::vector<OptionSpec> make_table() {
               1, 10000, false, "auto"),
         positive(row("sigma-spatial", "pipeline.smooth.sigma_spatial", G::Smoothing, T::Advanced, S,
                      [](RunOptions& o) -> auto& { return o.pipeline.smooth.sigma_spatial; },
-                     "bilateral, guided, tv: the spatial Gaussian's sigma in length units")),
+                     "bilateral, guided, tv: the spatial Gaussian's sigma in length units (auto: twice the "
+                     "input's measured noise, at most 0.6, at least a voxel)"),
+                 "auto"),
         positive(row("sigma-range", "pipeline.smooth.sigma_range", G::Smoothing, T::Advanced, S,
                      [](RunOptions& o) -> auto& { return o.pipeline.smooth.sigma_range; },
                      "bilateral, guided, tv: the range Gaussian's sigma on the normals' chord")),
@@ -260,6 +262,28 @@ std::vector<OptionSpec> make_table() {
         range(row("fit-steps", "pipeline.fit.vertex_steps", G::OutputMesh, T::Expert, S,
                   [](RunOptions& o) -> auto& { return o.pipeline.fit.vertex_steps; },
                   "keep: vertex-update iterations turning the faces to the result's normals"), 0, 100000),
+        range(row("face-steps", "pipeline.faces.normal_steps", G::OutputMesh, T::Expert, S,
+                  [](RunOptions& o) -> auto& { return o.pipeline.faces.normal_steps; },
+                  "keep: rounds of the face filter that sharpens the kept faces where the volume's normals round a crease (0: none)"), 0, 100000),
+        range(row("face-vertex-steps", "pipeline.faces.vertex_steps", G::OutputMesh, T::Library, S,
+                  [](RunOptions& o) -> auto& { return o.pipeline.faces.vertex_steps; },
+                  "keep: vertex-update iterations in each round of the face filter"), 0, 100000),
+        positive(row("face-sigma-r", "pipeline.faces.sigma_r", G::OutputMesh, T::Library, S,
+                     [](RunOptions& o) -> auto& { return o.pipeline.faces.sigma_r; },
+                     "keep: the face filter's range scale on the guidance normals (a chord length)")),
+        positive(row("face-sigma-s", "pipeline.faces.sigma_s", G::OutputMesh, T::Library, S,
+                     [](RunOptions& o) -> auto& { return o.pipeline.faces.sigma_s; },
+                     "keep: the face filter's spatial scale, in mean distances between adjacent faces' centroids")),
+        range(row("face-rings", "pipeline.faces.rings", G::OutputMesh, T::Library, S,
+                  [](RunOptions& o) -> auto& { return o.pipeline.faces.rings; },
+                  "keep: the face filter's neighbourhood, in vertex rings"), 1, 100),
+        row("face-patch", "pipeline.faces.patch_guidance", G::OutputMesh, T::Library, S,
+            [](RunOptions& o) -> auto& { return o.pipeline.faces.patch_guidance; },
+            "keep: the face filter's guidance is each face's most consistent patch"),
+        range(row("face-own-patch", "pipeline.faces.own_patch_bias", G::OutputMesh, T::Library, S,
+                  [](RunOptions& o) -> auto& { return o.pipeline.faces.own_patch_bias; },
+                  "keep: a neighbour's patch guides a face when its spread is below this fraction of the face's own"),
+              0, 1, true),
         range(row("boundary-rings", "pipeline.fit.boundary_rings", G::OutputMesh, T::Expert, S,
                   [](RunOptions& o) -> auto& { return o.pipeline.fit.boundary_rings; },
                   "keep: an open boundary stays, and the vertices within this many edge rings of it move partly"),
@@ -569,6 +593,8 @@ Json resolved_json(const PipelineOptions& o, const PipelineReport& r, double vox
         if (s.length_scale == 0 && r.length_scale > 0 && voxel_size > 0)
             s.length_scale = float(r.length_scale / voxel_size);
         j.set("length_scale", r.length_scale)
+            .set("noise", r.noise)
+            .set("sigma_spatial", r.sigma_spatial)
             .set("iterations", s.iterations > 0 ? s.iterations : default_iterations(s.mode))
             .set("iterations_run", r.smooth.iterations_run())
             .set("normal_steps", s.normal_steps > 0 ? s.normal_steps : default_normal_steps(s.mode))

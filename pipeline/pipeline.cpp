@@ -13,6 +13,7 @@
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
 #include "extract/surface_attributes.h"
+#include "metrics/noise.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/options.h"
 #include "remesh/decimate.h"
@@ -68,8 +69,11 @@ void validate(const PipelineOptions& o) {
     RunOptions run;
     run.pipeline = o;
     check_options(run, "smooth_mesh");  // each option's range, from the options table
-    if (o.smoothing)
-        validate_smooth_options(o.smooth, "smooth_mesh", "smooth.");  // the engine's fields the table has not
+    if (o.smoothing) {  // the engine's fields the table has not (an automatic sigma_spatial is resolved later)
+        SmoothOptions s = o.smooth;
+        if (s.sigma_spatial == 0) s.sigma_spatial = float(kMaxAutoSigmaSpatial);
+        validate_smooth_options(s, "smooth_mesh", "smooth.");
+    }
     // the rules between options
     if (o.sharpen && o.smoothing) bad_option("sharpen", "true", "false with smoothing (it sharpens a re-meshing)");
     if (o.sharpen && o.connectivity == Connectivity::Keep)
@@ -482,7 +486,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     Volume v = mesh_to_volume(m, o, &r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
     if (o.smoothing)
-        smooth_volume_stage(v, o, model_length_scale(m), &r, progress, o.fit_to_normal_map ? &normal_map : nullptr);
+        smooth_volume_stage(v, o, model_length_scale(m), estimate_noise(m).sigma, &r, progress,
+                            o.fit_to_normal_map ? &normal_map : nullptr);
     const bool open = has_open_boundary(m);
     const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && o.max_error == 0 && !o.closed;
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
@@ -545,6 +550,18 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         return result;
     }
     result.mesh = std::move(fitted);
+    if (o.faces.normal_steps > 0) {
+        // the volume's normals guide a filter of the kept mesh's own faces: their creases as sharp as the
+        // input's tessellation allows, where the grid rounds them over a voxel
+        Stopwatch faces_clock;
+        const std::vector<Vec3d> guide =
+            volume_normals_at_faces(result.mesh, v, normal_map[0].values.empty() ? nullptr : &normal_map);
+        r.faces = filter_faces(result.mesh, o.faces, &guide);
+        r.faces_filtered = true;
+        const double seconds = faces_clock.lap();
+        r.seconds.extract += seconds;
+        r.seconds.total += seconds;
+    }
     // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
     // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward where
     // the input had them (halfway each round, all the way in the end), until none does: the kept mesh has no
@@ -577,8 +594,14 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     return result;
 }
 
-void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_length_scale, PipelineReport* report,
-                         Progress* progress, NormalMap* normal_map) {
+double auto_sigma_spatial(double noise, double length_unit, double voxel_size) {
+    if (!(noise > 0) || !(length_unit > 0)) return kMaxAutoSigmaSpatial;
+    return std::clamp(2.0 * noise / length_unit, std::min(voxel_size / length_unit, kMaxAutoSigmaSpatial),
+                      kMaxAutoSigmaSpatial);
+}
+
+void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_length_scale, double noise,
+                         PipelineReport* report, Progress* progress, NormalMap* normal_map) {
     PipelineReport local;
     PipelineReport& r = report ? *report : local;
     Stopwatch clock;
@@ -589,6 +612,9 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_len
     } else {
         r.length_scale = double(so.length_scale) * v.grid.voxel_size;
     }
+    r.noise = noise;
+    if (so.sigma_spatial == 0) so.sigma_spatial = float(auto_sigma_spatial(noise, r.length_scale, v.grid.voxel_size));
+    r.sigma_spatial = so.sigma_spatial;
     r.smooth = smooth_volume(v, so, progress, normal_map);
     r.smoothed = true;
     append(r.warnings, r.smooth.warnings);
@@ -608,7 +634,8 @@ PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress
     PipelineResult result;
     PipelineReport& r = result.report;
     r.scan.grid = v.grid;
-    if (o.smoothing) smooth_volume_stage(v, o, kVolumeLengthScaleVoxels * v.grid.voxel_size, &r, progress, normal_map);
+    if (o.smoothing)
+        smooth_volume_stage(v, o, kVolumeLengthScaleVoxels * v.grid.voxel_size, 0, &r, progress, normal_map);
     if (want_mesh) {
         result.mesh = volume_to_mesh(v, o, &r, progress);
         check_output(result.mesh, r, true, true);

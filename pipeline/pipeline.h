@@ -15,6 +15,7 @@
 #include "core/progress.h"
 #include "core/volume.h"
 #include "extract/extract_surface.h"
+#include "fit/face_filter.h"
 #include "fit/fit_mesh.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
@@ -145,6 +146,7 @@ struct PipelineOptions {
     /// 0, is set from length_scale below. The pipeline's default mode is Bilateral (the engine's
     /// own default, Anisotropic, is the paper's): docs/history/benchmarks-2026.md, "Normal filters beyond
     /// the paper", has the study that chose it.
+    /// Its sigma_spatial, when 0, follows the input's noise (auto_sigma_spatial).
     SmoothOptions smooth{.mode = SmoothMode::Bilateral};
     /// World units, >= 0: the model's length unit for the engine (SmoothOptions::length_scale);
     /// 0: the input's median edge length, at most 1/25.6 of its longest side (model_length_scale).
@@ -159,6 +161,9 @@ struct PipelineOptions {
     bool closed = false;
     /// The fit of the input's mesh (Connectivity::Keep).
     FitOptions fit;
+    /// The kept mesh's face filter after the fit, guided by the volume's normals (filter_faces);
+    /// faces.normal_steps = 0 skips it.
+    FaceFilterOptions faces;
     /// Turn the kept mesh's faces to the engine's last filtered normal map (smooth_volume's normal_map)
     /// rather than to ∇φ of the result.
     bool fit_to_normal_map = false;
@@ -207,12 +212,16 @@ struct PipelineReport {
     double memory_estimate_bytes = 0;                   ///< estimated peak of the run (see check_memory)
     ScanConvertReport scan;
     double length_scale = 0;         ///< world units: the model length unit the engine ran with (0: not smoothed)
+    double noise = 0;                ///< world units: the input's noise (estimate_noise; 0: not estimated)
+    double sigma_spatial = 0;        ///< length units: the spatial scale the model-unit filters ran with
     bool smoothed = false;           ///< smooth_volume ran
     SmoothReport smooth;             ///< valid when smoothed
     ExtractReport extract;           ///< valid when !connectivity_kept
     bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
     bool fitted = false;             ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
     FitReport fit;                   ///< valid when fitted
+    bool faces_filtered = false;     ///< the kept mesh's faces were filtered (filter_faces)
+    FaceFilterReport faces;          ///< valid when faces_filtered
     /// Kept: vertices moved back toward their input position (halfway each time, all the way after four halvings)
     /// because the fit made their faces intersect others, lose their area or turn over against the smoothed surface
     /// (faces_against_volume) where the input's did not; -1: the intersections not checked (a build without CGAL).
@@ -298,10 +307,22 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& options, PipelineRep
 /// "Volumes in and out".
 inline constexpr double kVolumeLengthScaleVoxels = 1.0;
 
+/// The spatial scale of the model-unit filters (bilateral, guided, tv) when sigma_spatial is 0 (`auto`), in
+/// length units: twice the input's noise (estimate_noise, world units), so that the filter averages over
+/// the scale the noise moved the vertices and no further (σ = 0.3 edges gives 0.6, the default); never
+/// more than kMaxAutoSigmaSpatial (a coarse model's curvature and creases read as noise), never below one
+/// voxel (a smaller disc holds no neighbour); kMaxAutoSigmaSpatial when the noise is unknown (0: a volume
+/// input). length_unit and voxel_size in world units. Not the default: on the study's pairs the noise
+/// alone does not say how much to smooth (at the same σ = 0.2 edges julius gains 1.2° and bunny loses
+/// 0.8°; benchmarks/README.md, "Kept mesh").
+inline constexpr double kMaxAutoSigmaSpatial = 0.6;
+double auto_sigma_spatial(double noise, double length_unit, double voxel_size);
+
 /// The smoothing stage of smooth_mesh on its own: smooth_volume on v with options.smooth, its length
 /// unit (when options.smooth.length_scale is 0) options.length_scale, else default_length_scale (world
-/// units). Fills report's length_scale, smoothed, smooth, seconds.smooth and warnings.
-void smooth_volume_stage(Volume& v, const PipelineOptions& options, double default_length_scale,
+/// units), and its sigma_spatial (when 0) auto_sigma_spatial of noise (world units; 0: unknown). Fills
+/// report's length_scale, noise, sigma_spatial, smoothed, smooth, seconds.smooth and warnings.
+void smooth_volume_stage(Volume& v, const PipelineOptions& options, double default_length_scale, double noise = 0,
                          PipelineReport* report = nullptr, Progress* progress = nullptr,
                          NormalMap* normal_map = nullptr);
 

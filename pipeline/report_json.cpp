@@ -170,7 +170,7 @@ Json to_json(const PipelineReport& r) {
     Json vox = to_json(r.scan);
     vox.set("band_half_width", r.scan_options.half_width);
     j.set("voxelize", vox);
-    if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
+    if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale).set("noise", r.noise);
     j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");
     if (r.fitted) {
         Json f = Json::object();
@@ -181,6 +181,9 @@ Json to_json(const PipelineReport& r) {
             .set("max_distance", r.fit.max_distance)
             .set("mean_face_angle_deg", r.fit.mean_face_angle_deg);
         if (r.connectivity_kept) f.set("restored", r.fit_restored);
+        if (r.faces_filtered)
+            f.set("face_filter",
+                  Json::object().set("faces", r.faces.faces).set("reverted_moves", r.faces.reverted_moves));
         j.set("fit", f);
     }
     if (!r.connectivity_kept) j.set("extract", to_json(r.extract));
@@ -250,7 +253,7 @@ Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double v
             .set("iterations", s.iterations > 0 ? s.iterations : default_iterations(s.mode))
             .set("normal_steps", s.normal_steps > 0 ? s.normal_steps : default_normal_steps(s.mode))
             .set("length_scale", r.length_scale)
-            .set("sigma_spatial", s.sigma_spatial)
+            .set("sigma_spatial", r.sigma_spatial > 0 ? r.sigma_spatial : double(s.sigma_spatial))
             .set("sigma_range", s.sigma_range)
             .set("tv_lambda", s.tv_lambda)
             .set("mu", s.mu)
@@ -274,6 +277,7 @@ Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double v
         .set("projection_steps", o.fit.projection_steps)
         .set("relax_steps", o.fit.relax_steps)
         .set("fit_steps", o.fit.vertex_steps)
+        .set("face_steps", o.faces.normal_steps)
         .set("boundary_rings", o.fit.boundary_rings)
         .set("iso", o.extract.iso)
         .set("sharpen", o.sharpen)
