@@ -167,31 +167,32 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
         if (o.patch_guidance) {
             parallel(nf, [&](std::size_t f) {
                 if (!live[f]) return;
-                double best = std::numeric_limits<double>::infinity();
-                Vec3d chosen = base[f];
-                // the face's own patch first: another one wins only if clearly more consistent
-                std::uint32_t order[64];
-                std::size_t count = 0;
-                order[count++] = std::uint32_t(f);
-                for (const std::uint32_t* j = patch.begin(f); j != patch.end(f) && count < 64; ++j)
-                    if (*j != f) order[count++] = *j;
-                for (const std::uint32_t* j = order; j != order + count; ++j) {
-                    Vec3d mean(0, 0, 0);
-                    for (const std::uint32_t* k = patch.begin(*j); k != patch.end(*j); ++k)
+                // a patch's area-weighted mean base normal and its spread (the largest distance from it)
+                const auto mean_and_spread = [&](std::uint32_t j, Vec3d& mean) {
+                    mean = Vec3d(0, 0, 0);
+                    for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
                         mean = mean + base[*k] * area[*k];
                     const double len = norm(mean);
-                    if (!(len > 0)) continue;
+                    if (!(len > 0)) return std::numeric_limits<double>::infinity();
                     mean = mean / len;
                     double spread = 0.0;
-                    for (const std::uint32_t* k = patch.begin(*j); k != patch.end(*j); ++k)
+                    for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
                         if (area[*k] > 0) spread = std::max(spread, norm(base[*k] - mean));
-                    if (j == order) {
-                        best = spread * o.own_patch_bias;
-                        chosen = mean;
-                    } else if (spread < best) {
-                        best = spread, chosen = mean;
-                    }
+                    return spread;
+                };
+                // the face's own patch first: another one wins only if clearly more consistent
+                Vec3d chosen = base[f], mean;
+                double best = std::numeric_limits<double>::infinity();
+                if (const double own = mean_and_spread(std::uint32_t(f), mean); own < best) {
+                    best = own * o.own_patch_bias;
+                    chosen = mean;
                 }
+                for (const std::uint32_t* j = patch.begin(f); j != patch.end(f); ++j)
+                    if (*j != f)
+                        if (const double spread = mean_and_spread(*j, mean); spread < best) {
+                            best = spread;
+                            chosen = mean;
+                        }
                 guide[f] = chosen;
             });
         } else {
