@@ -485,9 +485,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     PipelineReport& r = result.report;
     Volume v = mesh_to_volume(m, o, &r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
-    if (o.smoothing)
-        smooth_volume_stage(v, o, model_length_scale(m), estimate_noise(m).sigma, &r, progress,
-                            o.fit_to_normal_map ? &normal_map : nullptr);
+    if (o.smoothing) smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr);
     const bool open = has_open_boundary(m);
     const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && o.max_error == 0 && !o.closed;
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
@@ -620,6 +618,11 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_len
     append(r.warnings, r.smooth.warnings);
     r.seconds.smooth = clock.lap();
     r.seconds.total += r.seconds.smooth;
+}
+
+void smooth_volume_stage(Volume& v, const PipelineOptions& o, const Mesh& input, PipelineReport* report,
+                         Progress* progress, NormalMap* normal_map) {
+    smooth_volume_stage(v, o, model_length_scale(input), estimate_noise(input).sigma, report, progress, normal_map);
 }
 
 PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress* progress, bool want_mesh,

@@ -325,6 +325,10 @@ double auto_sigma_spatial(double noise, double length_unit, double voxel_size);
 void smooth_volume_stage(Volume& v, const PipelineOptions& options, double default_length_scale, double noise = 0,
                          PipelineReport* report = nullptr, Progress* progress = nullptr,
                          NormalMap* normal_map = nullptr);
+/// smooth_volume_stage of a volume scan-converted from input: the length unit and the noise are input's
+/// (model_length_scale, estimate_noise).
+void smooth_volume_stage(Volume& v, const PipelineOptions& options, const Mesh& input, PipelineReport* report = nullptr,
+                         Progress* progress = nullptr, NormalMap* normal_map = nullptr);
 
 /// smooth_mesh for a volume (a level set, or an image made into one, image_to_volume): smooths v in place
 /// (options.smoothing; the length unit kVolumeLengthScaleVoxels voxels unless options.length_scale) and

@@ -7,7 +7,6 @@
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
 #include "io/io.h"
-#include "metrics/noise.h"
 #include "pipeline/pipeline.h"
 #include "pipeline/report_json.h"
 
@@ -252,10 +251,7 @@ FileRun mesh_file(Command c, const std::string& input, const std::string& output
         PipelineReport r;
         NormalMap normals;
         Volume v = naming(input, [&] { return mesh_to_volume(mesh, opt, &r, p); });
-        naming(input, [&] {
-            smooth_volume_stage(v, opt, model_length_scale(mesh), estimate_noise(mesh).sigma, &r, p,
-                                run.normal_map ? &normals : nullptr);
-        });
+        naming(input, [&] { smooth_volume_stage(v, opt, mesh, &r, p, run.normal_map ? &normals : nullptr); });
         f.report = mesh_report_json(c, run, r, t_read, info);
         f.report.set("input", mesh_input_json(input, info, mesh, r));
         stop_notes(opt, r, f);

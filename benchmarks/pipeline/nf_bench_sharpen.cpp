@@ -12,7 +12,6 @@
 #include "io/cgal/repair.h"
 #include "io/io.h"
 #include "metrics/compare.h"
-#include "metrics/noise.h"
 #include "pipeline/pipeline.h"
 #include "remesh/sharpen.h"
 #include "sdf/closest_triangle.h"
@@ -80,7 +79,7 @@ int main(int argc, char** argv) {
         PipelineReport r;
         Volume v = mesh_to_volume(noisy, o, &r);
         NormalMap map;
-        smooth_volume_stage(v, o, model_length_scale(noisy), estimate_noise(noisy).sigma, &r, nullptr, &map);
+        smooth_volume_stage(v, o, noisy, &r, nullptr, &map);
         const double h = v.grid.voxel_size;
         Stopwatch clock;
         const Mesh e = volume_to_mesh(v, o);
