@@ -418,6 +418,15 @@ Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* r
     return m;
 }
 
+const char* to_string(KeepFilter k) {
+    switch (k) {
+        case KeepFilter::Faces: return "faces";
+        case KeepFilter::Volume: return "volume";
+        case KeepFilter::Fit: return "fit";
+    }
+    return "?";
+}
+
 const char* to_string(Connectivity c) {
     switch (c) {
         case Connectivity::Keep: return "keep";
@@ -489,9 +498,10 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     const bool open = has_open_boundary(m);
     const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && o.max_error == 0 && !o.closed;
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
+    const bool own_faces = o.keep_filter == KeepFilter::Faces;
     Stopwatch fit_clock;
     Mesh fitted;
-    if (keep || (automatic && !open)) {
+    if ((keep && !own_faces) || (automatic && !open)) {
         // A closed input is kept when its fitted faces agree with the volume's normals (kAutoKeepFitAngleDeg):
         // the noise moved its vertices across the surface only, not along it.
         detail::begin(progress, "fit");
@@ -547,18 +557,38 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         check_output(result.mesh, r, true, !r.trimmed);
         return result;
     }
-    result.mesh = std::move(fitted);
-    if (o.faces.normal_steps > 0) {
-        // the volume's normals guide a filter of the kept mesh's own faces: their creases as sharp as the
-        // input's tessellation allows, where the grid rounds them over a voxel
+    if (own_faces) {
+        // the input's own faces filtered until the vertices moved as far as its noise: the mesh's detail is
+        // the input's, at its own resolution, where the grid would round it over a voxel
         Stopwatch faces_clock;
-        const std::vector<Vec3d> guide =
-            volume_normals_at_faces(result.mesh, v, normal_map[0].values.empty() ? nullptr : &normal_map);
-        r.faces = filter_faces(result.mesh, o.faces, &guide);
+        detail::begin(progress, "faces");
+        result.mesh = m;
+        const double noise = r.noise > 0 ? r.noise : estimate_noise(m).sigma;
+        FaceFilterOptions f = o.faces;
+        f.stop_displacement = noise;
+        if (f.normal_steps == 0) f.normal_steps = noise > 0 ? kMaxFaceRounds : 0;
+        r.faces = filter_faces(result.mesh, f);
         r.faces_filtered = true;
         const double seconds = faces_clock.lap();
         r.seconds.extract += seconds;
         r.seconds.total += seconds;
+    } else {
+        result.mesh = std::move(fitted);
+        const int rounds = o.keep_filter == KeepFilter::Fit ? 0 : o.faces.normal_steps > 0 ? o.faces.normal_steps : 1;
+        if (rounds > 0) {
+            // the volume's normals guide a filter of the kept mesh's own faces: their creases as sharp as the
+            // input's tessellation allows, where the grid rounds them over a voxel
+            Stopwatch faces_clock;
+            const std::vector<Vec3d> guide =
+                volume_normals_at_faces(result.mesh, v, normal_map[0].values.empty() ? nullptr : &normal_map);
+            FaceFilterOptions f = o.faces;
+            f.normal_steps = rounds;
+            r.faces = filter_faces(result.mesh, f, &guide);
+            r.faces_filtered = true;
+            const double seconds = faces_clock.lap();
+            r.seconds.extract += seconds;
+            r.seconds.total += seconds;
+        }
     }
     // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
     // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward where
@@ -577,9 +607,13 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         const std::vector<char> against = faces_against_volume(result.mesh, v);
         r.flipped_faces = std::count(against.begin(), against.end(), char(1));
     }
-    set_volume_normals(result.mesh, v);  // replaces the input's normals, which belong to the noisy surface
+    // replaces the input's normals, which belong to the noisy surface
+    if (own_faces)
+        compute_vertex_normals(result.mesh);
+    else
+        set_volume_normals(result.mesh, v);
     r.connectivity_kept = true;
-    if (r.fit.outside_band > 0)
+    if (!own_faces && r.fit.outside_band > 0)
         r.warnings.push_back(std::to_string(r.fit.outside_band) + " of the " + std::to_string(r.fit.vertices) +
                              " vertices were left unsmoothed: the smoothed surface is farther from them than its band "
                              "(at open borders, spikes, strays or parts thinner than a voxel)");

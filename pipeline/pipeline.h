@@ -66,6 +66,28 @@ enum class Connectivity {
 /// "auto", "keep", "remesh".
 const char* to_string(Connectivity c);
 
+/// How a kept mesh is smoothed.
+enum class KeepFilter {
+    /// The input's own faces filtered (filter_faces): each face's normal over its neighbours, guided by its
+    /// most consistent patch, the vertices following, round after round until they have moved as far as
+    /// the input's noise (estimate_noise; Morozov's discrepancy principle), at most kMaxFaceRounds. The
+    /// volume decides Auto's keep and guards the result against faces that turn over or intersect.
+    Faces,
+    /// The vertices fitted to the processed volume (fit_mesh_to_volume), then the face filter guided by
+    /// the volume's normals (one round unless faces.normal_steps says otherwise): the paper's surface on
+    /// the input's mesh.
+    Volume,
+    /// The fit to the processed volume alone.
+    Fit,
+};
+
+/// "faces", "volume", "fit".
+const char* to_string(KeepFilter k);
+
+/// KeepFilter::Faces: the most rounds of the face filter (each round moves the vertices less; on the study's
+/// noisy pairs the noise is reached after 3 to 19).
+inline constexpr int kMaxFaceRounds = 30;
+
 /// Connectivity::Auto keeps a closed input's mesh when, fitted to the processed volume, its faces
 /// are within this mean angle (degrees, FitReport::mean_face_angle_deg) of the volume's normals, and
 /// re-meshes it otherwise. Chosen on the study's 12 closed pairs (docs/history/benchmarks-2026.md, "The user's mesh
@@ -161,9 +183,12 @@ struct PipelineOptions {
     bool closed = false;
     /// The fit of the input's mesh (Connectivity::Keep).
     FitOptions fit;
-    /// The kept mesh's face filter after the fit, guided by the volume's normals (filter_faces);
-    /// faces.normal_steps = 0 skips it.
-    FaceFilterOptions faces;
+    /// How a kept mesh is smoothed: its own faces filtered (the default), or fitted to the volume.
+    KeepFilter keep_filter = KeepFilter::Faces;
+    /// The kept mesh's face filter (filter_faces). faces.normal_steps: the most rounds; 0 (the default) is
+    /// kMaxFaceRounds for KeepFilter::Faces (which stops at the input's noise) and 1 for KeepFilter::Volume.
+    /// faces.stop_displacement is set from the input's noise (KeepFilter::Faces).
+    FaceFilterOptions faces{.normal_steps = 0};
     /// Turn the kept mesh's faces to the engine's last filtered normal map (smooth_volume's normal_map)
     /// rather than to ∇φ of the result.
     bool fit_to_normal_map = false;

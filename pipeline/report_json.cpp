@@ -181,11 +181,15 @@ Json to_json(const PipelineReport& r) {
             .set("max_distance", r.fit.max_distance)
             .set("mean_face_angle_deg", r.fit.mean_face_angle_deg);
         if (r.connectivity_kept) f.set("restored", r.fit_restored);
-        if (r.faces_filtered)
-            f.set("face_filter",
-                  Json::object().set("faces", r.faces.faces).set("reverted_moves", r.faces.reverted_moves));
         j.set("fit", f);
     }
+    if (r.faces_filtered)
+        j.set("face_filter", Json::object()
+                                 .set("faces", r.faces.faces)
+                                 .set("rounds", r.faces.rounds)
+                                 .set("rms_displacement", r.faces.rms_displacement)
+                                 .set("reverted_moves", r.faces.reverted_moves)
+                                 .set("restored", r.fit_restored));
     if (!r.connectivity_kept) j.set("extract", to_json(r.extract));
     if (r.sharpened) {
         const SharpenReport& h = r.sharpen;
@@ -277,6 +281,7 @@ Json parameters_json(const PipelineOptions& o, const PipelineReport& r, double v
         .set("projection_steps", o.fit.projection_steps)
         .set("relax_steps", o.fit.relax_steps)
         .set("fit_steps", o.fit.vertex_steps)
+        .set("keep_filter", to_string(o.keep_filter))
         .set("face_steps", o.faces.normal_steps)
         .set("boundary_rings", o.fit.boundary_rings)
         .set("iso", o.extract.iso)

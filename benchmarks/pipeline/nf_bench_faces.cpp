@@ -1,5 +1,7 @@
 // nf_bench_faces START GT [--guide MESH] [--rounds N] [--vsteps N] [--sigma-r S] [--sigma-s S] [--rings R] [--no-patch]
-//                [--out FILE]
+//                [--own B] [--discrepancy D] [--out FILE]
+// --discrepancy D: rounds one at a time, without guidance, until the vertices moved D times START's estimated
+// noise (estimate_noise), at most 40: the rule of the kept mesh's default filter (KeepFilter::Faces) at D = 1.
 // The face filter of the kept mesh (fit/face_filter.h) on its own: START (e.g. a kept result, or the noisy
 // mesh) is filtered, guided by GUIDE's face normals where given (a kept result: the volume's normals), and
 // measured face by face against GT (the papers' metric: the plain mean over faces of the normal angle).
@@ -14,6 +16,7 @@
 #include "fit/face_filter.h"
 #include "io/io.h"
 #include "metrics/compare.h"
+#include "metrics/noise.h"
 
 using namespace normalflow;
 
@@ -26,6 +29,7 @@ int main(int argc, char** argv) {
     const Mesh gt = read_mesh(argv[2]);
     FaceFilterOptions o;
     std::string guide_path, out;
+    double discrepancy = 0;
     for (int i = 3; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has = i + 1 < argc;
@@ -47,6 +51,8 @@ int main(int argc, char** argv) {
             o.own_patch_bias = std::atof(argv[++i]);
         else if (a == "--out" && has)
             out = argv[++i];
+        else if (a == "--discrepancy" && has)
+            discrepancy = std::atof(argv[++i]);
         else {
             std::fprintf(stderr, "nf_bench_faces: unknown argument %s\n", a.c_str());
             return 2;
@@ -71,6 +77,17 @@ int main(int argc, char** argv) {
     };
     if (!guidance.empty()) std::printf("the guidance itself: %.2f deg\n", mean_angle(guidance));
     const double before = correspondence_errors(m, gt).mean_face_angle_deg;
+    if (discrepancy > 0) {
+        FaceFilterOptions d = o;
+        d.normal_steps = 40;
+        d.stop_displacement = discrepancy * estimate_noise(m).sigma;
+        Stopwatch c;
+        const FaceFilterReport r = filter_faces(m, d);
+        std::printf("discrepancy %.2f: %d rounds, %.2f deg, %.2f s\n", discrepancy, r.rounds,
+                    correspondence_errors(m, gt).mean_face_angle_deg, c.lap());
+        if (!out.empty()) write_mesh(out, m);
+        return 0;
+    }
     Stopwatch clock;
     std::vector<Vec3d> filtered;
     const FaceFilterReport r = filter_faces(m, o, guidance.empty() ? nullptr : &guidance, nullptr, &filtered);

@@ -36,10 +36,11 @@ struct Rows {
 FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::vector<Vec3d>* guidance,
                               const std::vector<char>* held, std::vector<Vec3d>* filtered_normals) {
     if (o.normal_steps < 0 || o.vertex_steps < 0 || o.rings < 1 || !(o.sigma_r > 0) || !(o.sigma_s > 0) ||
-        !std::isfinite(o.sigma_r) || !std::isfinite(o.sigma_s) || !(o.own_patch_bias > 0 && o.own_patch_bias <= 1))
+        !std::isfinite(o.sigma_r) || !std::isfinite(o.sigma_s) || !(o.own_patch_bias > 0 && o.own_patch_bias <= 1) ||
+        !(o.stop_displacement >= 0) || !std::isfinite(o.stop_displacement))
         throw InvalidInput(
             "filter_faces: normal_steps and vertex_steps must be >= 0, rings >= 1, sigma_r and sigma_s finite and > 0, "
-            "own_patch_bias in (0, 1]");
+            "own_patch_bias in (0, 1], stop_displacement finite and >= 0");
     check_mesh(m, "filter_faces");
     const std::size_t nf = m.triangles.size();
     if (guidance && guidance->size() != nf)
@@ -158,7 +159,16 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
 
     std::vector<Vec3d> next(n), base(nf);
     std::vector<char> revert(n, 0);
+    const std::vector<Vec3d> start = x;
+    // the vertices' root-mean-square distance from where they began (a sum in a fixed order: thread-independent)
+    const auto rms_displacement = [&] {
+        double sum = 0.0;
+        for (std::size_t i = 0; i < n; ++i) sum += dot(x[i] - start[i], x[i] - start[i]);
+        return std::sqrt(sum / double(n));
+    };
     for (int round = 0; round < o.normal_steps; ++round) {
+        if (o.stop_displacement > 0 && rep.rms_displacement >= o.stop_displacement) break;
+        ++rep.rounds;
         // the normals the guidance is built from: the given ones, else the current ones
         parallel(nf, [&](std::size_t f) {
             base[f] = normal[f];
@@ -247,6 +257,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             x.swap(next);
         }
         measure();
+        rep.rms_displacement = rms_displacement();
     }
     for (std::size_t i = 0; i < m.positions.size(); ++i) m.positions[i] = Vec3f(x[group[i]]);
     if (filtered_normals) *filtered_normals = filtered;

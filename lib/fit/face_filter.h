@@ -39,12 +39,19 @@ struct FaceFilterOptions {
     /// normal is tilted by the curvature: 1 is Zhang et al.'s choice of the most consistent patch,
     /// smaller keeps the own patch unless a crease runs through it. In (0, 1].
     double own_patch_bias = 0.35;
+    /// World units, >= 0. > 0: the rounds stop once the vertices' root-mean-square distance from where
+    /// they started reaches this length (normal_steps is then the most rounds). Given the input's noise
+    /// (estimate_noise), this is Morozov's discrepancy principle: remove as much as the noise, no more.
+    /// A filter run past it smooths away the surface's own detail; one stopped short leaves noise.
+    double stop_displacement = 0;
 };
 
 /// What filter_faces did.
 struct FaceFilterReport {
     std::size_t faces = 0;           ///< faces filtered (non-degenerate)
     std::size_t reverted_moves = 0;  ///< vertex moves undone because a face would have turned over
+    int rounds = 0;                  ///< rounds run
+    double rms_displacement = 0;     ///< world units: the vertices' root-mean-square distance from where they began
 };
 
 /// Filters m's face normals and moves its vertices to follow them; the vertices, faces and their order
@@ -57,7 +64,7 @@ struct FaceFilterReport {
 /// marks positions that do not move; vertices on an open boundary never move. filtered_normals (optional)
 /// receives the last round's filtered normals, one per face (a measurement: how good the target was).
 /// No face turns over: a vertex move that would turn a face to more than 90° from its filtered normal
-/// is undone.
+/// is undone. With options.stop_displacement, the rounds stop once the vertices have moved that far.
 /// \throw InvalidInput for options out of range or sizes that do not match.
 /// Cost: O(F · k · normal_steps + F · vertex_steps · normal_steps) for k faces in a neighbourhood;
 /// TBB-parallel, the result does not depend on the thread count.

@@ -154,6 +154,49 @@ TEST(FaceFilter, OpenBoundaryAndHeldVerticesStayAndCopiesMoveTogether) {
     EXPECT_TRUE(moved_inside);
 }
 
+TEST(FaceFilter, RoundsStopOnceTheVerticesMovedAsFarAsTheNoise) {
+    // the discrepancy principle: a noisy sphere (σ = 0.3 edges along the normals) filtered without guidance, its
+    // own faces guiding, stopping at the estimated noise: the last round crossed it, the one before had not,
+    // and the faces come back far closer to the clean ones. (On a cube the creases add to the estimate, which
+    // the filter then never reaches: it runs to normal_steps.)
+    const Mesh clean = test::icosphere(1.0, 4);
+    Mesh noisy = clean;
+    NoiseOptions n;
+    n.sigma = 0.3;
+    add_noise(noisy, n);
+    const double sigma = estimate_noise(noisy).sigma;
+    FaceFilterOptions o;
+    o.normal_steps = 30;
+    o.stop_displacement = sigma;
+    Mesh m = noisy;
+    const FaceFilterReport r = filter_faces(m, o);
+    ASSERT_GT(r.rounds, 1);
+    EXPECT_LT(r.rounds, 30);
+    EXPECT_GE(r.rms_displacement, sigma);
+    double rms = 0;  // the report's displacement is the vertices' own
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        const Vec3d d = Vec3d(m.positions[i]) - Vec3d(noisy.positions[i]);
+        rms += dot(d, d);
+    }
+    EXPECT_NEAR(std::sqrt(rms / double(m.positions.size())), r.rms_displacement, 1e-6 * sigma + 1e-9);
+    Mesh shorter = noisy;
+    o.normal_steps = r.rounds - 1;
+    const FaceFilterReport s = filter_faces(shorter, o);
+    EXPECT_EQ(s.rounds, r.rounds - 1);
+    EXPECT_LT(s.rms_displacement, sigma);
+    // not run past the noise: the same rounds with a far larger budget
+    o.normal_steps = 1000;
+    Mesh again = noisy;
+    EXPECT_EQ(filter_faces(again, o).rounds, r.rounds);
+    EXPECT_EQ(again.positions, m.positions);
+    EXPECT_LT(mean_face_angle(m, clean), 0.25 * mean_face_angle(noisy, clean));
+    // a negative or infinite stop is refused
+    o.stop_displacement = -1;
+    EXPECT_THROW(filter_faces(again, o), InvalidInput);
+    o.stop_displacement = INFINITY;
+    EXPECT_THROW(filter_faces(again, o), InvalidInput);
+}
+
 TEST(FaceFilter, BadInput) {
     Mesh cube = test::subdivided_cube(2);
     FaceFilterOptions o;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <tuple>
 #include <vector>
@@ -108,27 +109,42 @@ PipelineOptions kept() {
 }
 
 TEST(KeptFaces, NoisyCubeAndOctahedronComeBackFlatAtTheirDihedralAngles) {
-    // σ = 0.3 edges along the normals; the sides judged off their edges (the grid rounds the edges and corners)
+    // σ = 0.3 edges along the normals; the sides judged off their edges (the grid rounds the edges and corners);
+    // measured 0.59° / 0.68° / 0.59° and flatness 1.08 / 3.32 / 4.18 (own faces / volume-guided / fit alone)
     Mesh cube = test::subdivided_cube(16);
     Mesh noisy = cube;
     NoiseOptions n;
     n.sigma = 0.3;
     add_noise(noisy, n);
     PipelineOptions o = kept();
-    const Sides truth = sides(cube, cube), filtered = sides(cube, smooth_mesh(noisy, o).mesh);
-    o.faces.normal_steps = 0;
+    const Sides truth = sides(cube, cube), own = sides(cube, smooth_mesh(noisy, o).mesh);
+    o.keep_filter = KeepFilter::Volume;
+    const Sides guided = sides(cube, smooth_mesh(noisy, o).mesh);
+    o.keep_filter = KeepFilter::Fit;
     const Sides fitted = sides(cube, smooth_mesh(noisy, o).mesh);
-    EXPECT_LT(dihedral_error(truth, filtered), 1.0);
-    EXPECT_LT(filtered.flatness, 0.85 * fitted.flatness);  // the face filter flattens the sides
-    EXPECT_LT(filtered.flatness, 0.15 * sides(cube, noisy).flatness);
-    // the octahedron's 109.5° dihedral angles: the sides are a few voxels wide between rounded edges and
-    // corners, and bend; measured 1.86° (issue 37's target of 1° is missed here)
+    std::printf("cube: dihedral error %.2f / %.2f / %.2f deg, flatness %.3f / %.3f / %.3f (faces / volume / fit)\n",
+                dihedral_error(truth, own), dihedral_error(truth, guided), dihedral_error(truth, fitted), own.flatness,
+                guided.flatness, fitted.flatness);
+    for (const Sides* s : {&own, &guided}) {
+        EXPECT_LT(dihedral_error(truth, *s), 1.0);
+        EXPECT_LT(s->flatness, 0.15 * sides(cube, noisy).flatness);
+    }
+    EXPECT_LT(guided.flatness, 0.85 * fitted.flatness);  // the volume-guided face filter flattens the fitted sides
+    // the octahedron's 109.5° dihedral angles: measured 2.22° with the own faces (the rounds stop at the noise
+    // before the sides near the corners are flat), 1.86° guided by the volume (its sides are a few voxels wide
+    // between rounded edges and corners, and bend): issue 37's target of 1° is missed here
     const Mesh octahedron = subdivided_octahedron(16);
     noisy = octahedron;
     add_noise(noisy, n);
     const Sides octa = sides(octahedron, smooth_mesh(noisy, kept()).mesh);
+    o.keep_filter = KeepFilter::Volume;
+    const Sides octa_guided = sides(octahedron, smooth_mesh(noisy, o).mesh);
+    std::printf("octahedron: dihedral error %.2f / %.2f deg, flatness %.3f / %.3f (faces / volume)\n",
+                dihedral_error(sides(octahedron, octahedron), octa),
+                dihedral_error(sides(octahedron, octahedron), octa_guided), octa.flatness, octa_guided.flatness);
     EXPECT_LT(dihedral_error(sides(octahedron, octahedron), octa), 2.5);
     EXPECT_LT(octa.flatness, 0.2 * sides(octahedron, noisy).flatness);
+    EXPECT_LT(dihedral_error(sides(octahedron, octahedron), octa_guided), 2.5);
 }
 
 TEST(KeptFaces, ASphereDoesNotDriftAndHeavyNoiseTurnsNoFaceOver) {

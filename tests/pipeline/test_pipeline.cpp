@@ -298,6 +298,7 @@ Mesh holed_sphere(double r, int levels) {
 
 TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
     PipelineOptions o = quick_options();
+    o.keep_filter = KeepFilter::Volume;  // the fit to the volume, measured below
     const Mesh open = holed_sphere(1.0, 3);
     const MeshReport before = mesh_report(open);
     ASSERT_GT(before.boundary_edges, 0u);
@@ -522,6 +523,7 @@ TEST(Pipeline, FitToTheNormalMapIsUsedWhenAsked) {
     // and they differ (the option reaches the fit)
     PipelineOptions o = quick_options();
     o.connectivity = Connectivity::Keep;
+    o.keep_filter = KeepFilter::Fit;
     Mesh noisy = test::icosphere(1.0, 3);
     for (std::size_t i = 0; i < noisy.positions.size(); ++i)
         noisy.positions[i] = noisy.positions[i] * float(1.0 + 0.01 * double(int(i * 7919 % 13) - 6) / 6.0);
