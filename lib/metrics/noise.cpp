@@ -98,32 +98,72 @@ NoiseEstimate estimate_noise(const Mesh& m) {
     }
     std::sort(all.begin(), all.end());
     std::vector<char> boundary(nv, 0);
-    std::vector<Vec3d> sum(nv);
-    std::vector<std::uint32_t> count(nv, 0);
+    std::vector<std::uint32_t> start(nv + 1, 0);  // the neighbours of v: nb[start[v] .. start[v + 1])
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> unique;
     double length = 0.0;
-    std::size_t edges = 0;
     for (std::size_t i = 0; i < all.size();) {
         std::size_t j = i;
         while (j < all.size() && all[j] == all[i]) ++j;
         const auto [a, b] = all[i];
         if (j - i == 1) boundary[a] = boundary[b] = 1;
-        sum[a] += Vec3d(w.positions[b]);
-        sum[b] += Vec3d(w.positions[a]);
-        ++count[a], ++count[b];
+        unique.push_back(all[i]);
+        ++start[a + 1], ++start[b + 1];
         length += norm(Vec3d(w.positions[a]) - Vec3d(w.positions[b]));
-        ++edges;
         i = j;
     }
-    r.mean_edge_length = edges ? length / double(edges) : 0.0;
-    double energy = 0.0;
+    r.mean_edge_length = unique.empty() ? 0.0 : length / double(unique.size());
+    for (std::size_t v = 0; v < nv; ++v) start[v + 1] += start[v];
+    std::vector<std::uint32_t> nb(start[nv]);
+    {
+        std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+        for (const auto& [a, b] : unique) nb[fill[a]++] = b, nb[fill[b]++] = a;
+    }
+    const auto k = [&](std::size_t v) { return double(start[v + 1] - start[v]); };
+    // δ_v: the umbrella offset along the normal, where v is interior with 3 or more neighbours
+    std::vector<double> offset(nv, 0.0);
+    std::vector<char> measured(nv, 0);
     for (std::size_t v = 0; v < nv; ++v) {
         const double len = norm(normal[v]);
-        if (boundary[v] || count[v] < 3 || !(len > 0)) continue;
-        const double d = dot(Vec3d(w.positions[v]) - sum[v] / double(count[v]), normal[v] / len);
-        energy += d * d / (1.0 + 1.0 / double(count[v]));
+        if (boundary[v] || k(v) < 3 || !(len > 0)) continue;
+        Vec3d c(0, 0, 0);
+        for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) c += Vec3d(w.positions[nb[i]]);
+        offset[v] = dot(Vec3d(w.positions[v]) - c / k(v), normal[v] / len);
+        measured[v] = 1;
+    }
+    // Δ_v = δ_v − mean of the neighbours' δ, where v and its neighbours are measured; its response to unit white
+    // noise is the sum of the squared coefficients of (I − A)² in row v (A: the neighbour mean), exact
+    double energy = 0.0, response = 0.0;
+    std::vector<std::pair<std::uint32_t, double>> row;
+    for (std::size_t v = 0; v < nv; ++v) {
+        if (!measured[v]) continue;
+        bool all_measured = true;
+        double mean = 0.0;
+        for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+            all_measured = all_measured && measured[nb[i]];
+            mean += offset[nb[i]];
+        }
+        if (!all_measured) continue;
+        const double d = offset[v] - mean / k(v);
+        row.assign(1, {std::uint32_t(v), 1.0});
+        for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) {
+            const std::uint32_t j = nb[i];
+            row.emplace_back(j, -2.0 / k(v));
+            for (std::uint32_t l = start[j]; l < start[j + 1]; ++l) row.emplace_back(nb[l], 1.0 / (k(v) * k(j)));
+        }
+        std::sort(row.begin(), row.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+        double squares = 0.0;
+        for (std::size_t i = 0; i < row.size();) {
+            double c = 0.0;
+            std::size_t j = i;
+            for (; j < row.size() && row[j].first == row[i].first; ++j) c += row[j].second;
+            squares += c * c;
+            i = j;
+        }
+        energy += d * d;
+        response += squares;
         ++r.vertices;
     }
-    r.sigma = r.vertices ? std::sqrt(energy / double(r.vertices)) : 0.0;
+    r.sigma = response > 0 ? std::sqrt(energy / response) : 0.0;
     return r;
 }
 

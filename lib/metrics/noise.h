@@ -68,20 +68,23 @@ double mean_edge_length(const Mesh& m);
 /// What estimate_noise measured.
 struct NoiseEstimate {
     double sigma = 0.0;           ///< the noise's standard deviation along the normal, world units; 0 if unknown
-    std::size_t vertices = 0;     ///< interior vertices measured (off any open boundary, 3 or more neighbours)
+    std::size_t vertices = 0;     ///< vertices measured (they and their neighbours interior, 3 or more neighbours)
     double mean_edge_length = 0;  ///< of the welded mesh, world units (to express sigma in edges)
 };
 
-/// Estimates how far noise moved m's vertices off its surface, from m alone: each interior vertex's
-/// offset from the centroid of its neighbours, along its area-weighted normal, is the noise of the
-/// vertex plus the mean of its k neighbours' (variance σ²(1 + 1/k)) plus the surface's curvature
-/// (ℓ²κ/4 for edges ℓ, small where the tessellation resolves the surface):
-/// σ = sqrt(mean over vertices of d_v² / (1 + 1/k_v)). On add_noise's Gaussian noise along the
-/// normals it recovers σ within a few percent; impulsive noise counts with its energy (a fraction f of
-/// vertices moved by σ reads as about σ·√f); a clean mesh reads small, its creases and curvature only.
-/// Accepts any triangle soup (welded exactly first; open boundaries and their vertices are skipped).
-/// 	hrow InvalidInput for out-of-range indices or non-finite positions.
-/// Cost: O(V + F log F), single-threaded, deterministic.
+/// Estimates how far noise moved m's vertices off its surface, from m alone. Each interior vertex's
+/// offset δ_v from the centroid of its neighbours, along its area-weighted normal, is its noise less the
+/// mean of its neighbours' plus the surface's curvature (about ℓ²κ/4 for edges ℓ), which varies slowly
+/// from vertex to vertex; the second difference Δ_v = δ_v − mean of the neighbours' δ keeps the noise and
+/// cancels most of the curvature. σ² = Σ Δ_v² / Σ c_v, where c_v is Δ_v's response to unit white noise on
+/// m's own connectivity (the sum of the squared coefficients of row v of (I − A)², A the neighbour mean;
+/// exact, no sampling). On add_noise's Gaussian noise along the normals it recovers σ within a few
+/// percent; impulsive noise counts with its energy (a fraction f of vertices moved by σ reads as about
+/// σ·√f); a clean mesh reads small: a sphere's curvature alone at about 1/16 of ℓ²κ/4, a scan's detail
+/// at 0.01–0.03 edges, creases more (fandisk 0.08 edges).
+/// Accepts any triangle soup (welded exactly first; vertices on or next to an open boundary are skipped).
+/// \throw InvalidInput for out-of-range indices or non-finite positions.
+/// Cost: O(V k² + F log F) for valence k, single-threaded, deterministic.
 NoiseEstimate estimate_noise(const Mesh& m);
 
 namespace detail {

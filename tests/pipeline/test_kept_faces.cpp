@@ -153,7 +153,16 @@ TEST(KeptFaces, ASphereDoesNotDriftAndHeavyNoiseTurnsNoFaceOver) {
     NoiseOptions n;
     n.sigma = 0.3;
     add_noise(noisy, n);
-    const Mesh round = smooth_mesh(noisy, kept()).mesh;
+    const PipelineResult result = smooth_mesh(noisy, kept());
+    const Mesh& round = result.mesh;
+    // the own faces filtered (no fit to the volume), round after round until the vertices moved as far as the
+    // input's noise: the last round crossed it
+    EXPECT_FALSE(result.report.fitted);
+    ASSERT_TRUE(result.report.faces_filtered);
+    EXPECT_GT(result.report.faces.rounds, 1);
+    EXPECT_LT(result.report.faces.rounds, kMaxFaceRounds);
+    EXPECT_GT(result.report.noise, 0.0);
+    EXPECT_GE(result.report.faces.rms_displacement, result.report.noise);
     EXPECT_NEAR(mesh_report(round).volume, mesh_report(sphere).volume, 0.005 * mesh_report(sphere).volume);
     double radius = 0;
     for (const Vec3f& p : round.positions) radius += norm(Vec3d(p));
