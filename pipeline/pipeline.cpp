@@ -557,38 +557,34 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         check_output(result.mesh, r, true, !r.trimmed);
         return result;
     }
+    // The kept mesh's face filter. Own faces: the input's, filtered until the vertices moved as far as its noise (the
+    // mesh's detail is the input's, at its own resolution, where the grid would round it over a voxel). Volume: the
+    // fitted mesh's, guided by the volume's normals (creases as sharp as the input's tessellation allows).
+    FaceFilterOptions faces = o.faces;
     if (own_faces) {
-        // the input's own faces filtered until the vertices moved as far as its noise: the mesh's detail is
-        // the input's, at its own resolution, where the grid would round it over a voxel
-        Stopwatch faces_clock;
-        detail::begin(progress, "faces");
         result.mesh = m;
-        const double noise = r.noise > 0 ? r.noise : estimate_noise(m).sigma;
-        FaceFilterOptions f = o.faces;
-        f.stop_displacement = noise;
-        if (f.normal_steps == 0) f.normal_steps = noise > 0 ? kMaxFaceRounds : 0;
-        r.faces = filter_faces(result.mesh, f);
+        // smooth_volume_stage measured it; without the engine it is measured here
+        faces.stop_displacement = r.smoothed ? r.noise : estimate_noise(m).sigma;
+        if (faces.normal_steps == 0) faces.normal_steps = faces.stop_displacement > 0 ? kMaxFaceRounds : 0;
+    } else {
+        result.mesh = std::move(fitted);
+        if (o.keep_filter == KeepFilter::Fit)
+            faces.normal_steps = 0;
+        else if (faces.normal_steps == 0)
+            faces.normal_steps = 1;
+    }
+    if (own_faces || faces.normal_steps > 0) {
+        Stopwatch faces_clock;
+        std::vector<Vec3d> guide;
+        if (own_faces)
+            detail::begin(progress, "faces");
+        else
+            guide = volume_normals_at_faces(result.mesh, v, normal_map[0].values.empty() ? nullptr : &normal_map);
+        r.faces = filter_faces(result.mesh, faces, own_faces ? nullptr : &guide);
         r.faces_filtered = true;
         const double seconds = faces_clock.lap();
         r.seconds.extract += seconds;
         r.seconds.total += seconds;
-    } else {
-        result.mesh = std::move(fitted);
-        const int rounds = o.keep_filter == KeepFilter::Fit ? 0 : o.faces.normal_steps > 0 ? o.faces.normal_steps : 1;
-        if (rounds > 0) {
-            // the volume's normals guide a filter of the kept mesh's own faces: their creases as sharp as the
-            // input's tessellation allows, where the grid rounds them over a voxel
-            Stopwatch faces_clock;
-            const std::vector<Vec3d> guide =
-                volume_normals_at_faces(result.mesh, v, normal_map[0].values.empty() ? nullptr : &normal_map);
-            FaceFilterOptions f = o.faces;
-            f.normal_steps = rounds;
-            r.faces = filter_faces(result.mesh, f, &guide);
-            r.faces_filtered = true;
-            const double seconds = faces_clock.lap();
-            r.seconds.extract += seconds;
-            r.seconds.total += seconds;
-        }
     }
     // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
     // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward where

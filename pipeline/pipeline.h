@@ -85,7 +85,7 @@ enum class KeepFilter {
 const char* to_string(KeepFilter k);
 
 /// KeepFilter::Faces: the most rounds of the face filter (each round moves the vertices less; on the study's
-/// noisy pairs the noise is reached after 3 to 19).
+/// noisy pairs the noise is reached after 2 to 7).
 inline constexpr int kMaxFaceRounds = 30;
 
 /// Connectivity::Auto keeps a closed input's mesh when, fitted to the processed volume, its faces
