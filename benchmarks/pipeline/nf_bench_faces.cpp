@@ -1,5 +1,7 @@
 // nf_bench_faces START GT [--guide MESH] [--rounds N] [--vsteps N] [--sigma-r S] [--sigma-s S] [--rings R] [--no-patch]
-//                [--own B] [--discrepancy D] [--out FILE]
+//                [--own B] [--discrepancy D] [--trace N] [--out FILE]
+// --trace N: N rounds one at a time, without guidance; after each, one line: the round, the vertices' RMS distance
+// from START and the noise estimate of the result (both over START's estimated noise), the face-by-face angle.
 // --discrepancy D: rounds one at a time, without guidance, until the vertices moved D times START's estimated
 // noise (estimate_noise), at most 40: the rule of the kept mesh's default filter (KeepFilter::Faces) at D = 1.
 // The face filter of the kept mesh (fit/face_filter.h) on its own: START (e.g. a kept result, or the noisy
@@ -30,6 +32,7 @@ int main(int argc, char** argv) {
     FaceFilterOptions o;
     std::string guide_path, out;
     double discrepancy = 0;
+    int trace = 0;
     for (int i = 3; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has = i + 1 < argc;
@@ -37,6 +40,8 @@ int main(int argc, char** argv) {
             guide_path = argv[++i];
         else if (a == "--rounds" && has)
             o.normal_steps = std::atoi(argv[++i]);
+        else if (a == "--trace" && has)
+            trace = std::atoi(argv[++i]);
         else if (a == "--vsteps" && has)
             o.vertex_steps = std::atoi(argv[++i]);
         else if (a == "--sigma-r" && has)
@@ -77,6 +82,23 @@ int main(int argc, char** argv) {
     };
     if (!guidance.empty()) std::printf("the guidance itself: %.2f deg\n", mean_angle(guidance));
     const double before = correspondence_errors(m, gt).mean_face_angle_deg;
+    if (trace > 0) {
+        const double noise = estimate_noise(m).sigma;
+        const Mesh m0 = m;
+        FaceFilterOptions d = o;
+        d.normal_steps = 1;
+        for (int r = 1; r <= trace; ++r) {
+            filter_faces(m, d);
+            double sum = 0;
+            for (std::size_t i = 0; i < m.positions.size(); ++i) {
+                const Vec3d v = Vec3d(m.positions[i]) - Vec3d(m0.positions[i]);
+                sum += dot(v, v);
+            }
+            std::printf("%d %.3f %.3f %.2f\n", r, std::sqrt(sum / double(m.positions.size())) / noise,
+                        estimate_noise(m).sigma / noise, correspondence_errors(m, gt).mean_face_angle_deg);
+        }
+        return 0;
+    }
     if (discrepancy > 0) {
         FaceFilterOptions d = o;
         d.normal_steps = 40;
