@@ -490,15 +490,23 @@ void check_output(const Mesh& m, PipelineReport& r, bool remeshed, bool closed, 
 }  // namespace
 
 PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* progress) {
+    validate(o);  // every field, the engine's too where it will not run
     PipelineResult result;
     PipelineReport& r = result.report;
-    Volume v = mesh_to_volume(m, o, &r, progress);
-    NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
-    if (o.smoothing) smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr);
     const bool open = has_open_boundary(m);
     const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && o.max_error == 0 && !o.closed;
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
     const bool own_faces = o.keep_filter == KeepFilter::Faces;
+    // A mesh kept and filtered on its own faces takes nothing from the engine but the guard's reference below (which
+    // side of the surface each face looks to): the input's own distance serves that, and the engine does not run (nor
+    // counts in the memory check). It runs wherever its surface is used: a re-meshed result, the fit, and auto's keep
+    // or re-mesh on a closed input.
+    const bool engine = o.smoothing && !(keep && own_faces);
+    PipelineOptions scan = o;
+    scan.smoothing = engine;
+    Volume v = mesh_to_volume(m, scan, &r, progress);
+    NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
+    if (engine) smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr);
     Stopwatch fit_clock;
     Mesh fitted;
     if ((keep && !own_faces) || (automatic && !open)) {
@@ -563,8 +571,9 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     FaceFilterOptions faces = o.faces;
     if (own_faces) {
         result.mesh = m;
-        // smooth_volume_stage measured it; without the engine it is measured here
-        faces.stop_displacement = r.smoothed ? r.noise : estimate_noise(m).sigma;
+        // smooth_volume_stage measured it when the engine ran; otherwise it is measured here
+        if (!r.smoothed) r.noise = estimate_noise(m).sigma;
+        faces.stop_displacement = r.noise;
         if (faces.normal_steps == 0) faces.normal_steps = faces.stop_displacement > 0 ? kMaxFaceRounds : 0;
     } else {
         result.mesh = std::move(fitted);
@@ -589,8 +598,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
     // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward where
     // the input had them (halfway each round, all the way in the end), until none does: the kept mesh has no
-    // intersection the input did not have. Nor may a face turn over against the smoothed surface where the input's
-    // face did not: its vertices move back the same way. Moving vertices back for one reason can break the other, so
+    // intersection the input did not have. Nor may a face turn over against the volume's surface (smoothed, or the
+    // input's own where the engine did not run) where the input's face did not: its vertices move back the same way. Moving vertices back for one reason can break the other, so
     // the two alternate until both hold.
     {
         const std::vector<char> input_against = faces_against_volume(m, v);

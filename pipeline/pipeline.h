@@ -71,7 +71,9 @@ enum class KeepFilter {
     /// The input's own faces filtered (filter_faces): each face's normal over its neighbours, guided by its
     /// most consistent patch, the vertices following, round after round until they have moved as far as
     /// the input's noise (estimate_noise; Morozov's discrepancy principle), at most kMaxFaceRounds. The
-    /// volume decides Auto's keep and guards the result against faces that turn over or intersect.
+    /// smoothed volume decides Auto's keep on a closed input; the volume guards the result against faces that
+    /// turn over or intersect. Where the mesh is kept without that decision (Connectivity::Keep, or Auto on an
+    /// open input) the engine does not run: the guard's volume is the input's own distance.
     Faces,
     /// The vertices fitted to the processed volume (fit_mesh_to_volume), then the face filter guided by
     /// the volume's normals (one round unless faces.normal_steps says otherwise): the paper's surface on
@@ -248,8 +250,9 @@ struct PipelineReport {
     bool faces_filtered = false;     ///< the kept mesh's faces were filtered (filter_faces)
     FaceFilterReport faces;          ///< valid when faces_filtered
     /// Kept: vertices moved back toward their input position (halfway each time, all the way after four halvings)
-    /// because the fit made their faces intersect others, lose their area or turn over against the smoothed surface
-    /// (faces_against_volume) where the input's did not; -1: the intersections not checked (a build without CGAL).
+    /// because the fit made their faces intersect others, lose their area or turn over against the volume's surface
+    /// (faces_against_volume; the smoothed one, or the input's own where the engine did not run) where the input's
+    /// did not; -1: the intersections not checked (a build without CGAL).
     long long fit_restored = 0;
     bool trimmed = false;    ///< an open input's re-meshed result was trimmed to its footprint
     TrimReport trim;         ///< valid when trimmed
@@ -269,8 +272,8 @@ struct PipelineReport {
     long long output_self_intersections = -1;
     /// Kept: the pairs the input had, counted the same way (welded: a kept input may be a soup); -1 otherwise.
     long long input_self_intersections = -1;
-    /// Kept: the faces of the result, and of the input, that point against the smoothed surface
-    /// (faces_against_volume); -1 otherwise.
+    /// Kept: the faces of the result, and of the input, that point against the volume's surface (the smoothed one,
+    /// or the input's own where the engine did not run: KeepFilter::Faces); -1 otherwise.
     long long flipped_faces = -1, input_flipped_faces = -1;
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
@@ -293,9 +296,11 @@ struct PipelineResult {
 /// Accepted input: what scan_convert accepts (any triangle soup; open sheets need
 /// scan.shell_thickness). The re-meshed result is closed and manifold (before decimation by
 /// construction); with options.connectivity Keep (Auto: for an open input) it is m itself with its
-/// vertices moved (fit_mesh_to_volume), as open as m was. An open input re-meshed is trimmed to its
+/// vertices moved (options.keep_filter: its own faces filtered, and then the engine does not run; or
+/// fitted to the volume, fit_mesh_to_volume), as open as m was. An open input re-meshed is trimmed to its
 /// footprint (trim_to_footprint), unless options.closed.
-/// Attributes: the result has vertex normals from the processed volume (set_volume_normals). Kept
+/// Attributes: the result has vertex normals from the processed volume (set_volume_normals), or, kept on its own
+/// faces, from those faces (compute_vertex_normals). Kept
 /// connectivity keeps m's colours and texture coordinates; re-meshing takes m's colours by closest
 /// point (transfer_colors) and drops its texture coordinates, with a warning.
 /// \throw InvalidInput for bad options (the message names the field, e.g. "smooth.mu"), a mesh

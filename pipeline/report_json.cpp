@@ -170,7 +170,8 @@ Json to_json(const PipelineReport& r) {
     Json vox = to_json(r.scan);
     vox.set("band_half_width", r.scan_options.half_width);
     j.set("voxelize", vox);
-    if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale).set("noise", r.noise);
+    if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
+    if (r.smoothed || r.noise > 0) j.set("noise", r.noise);
     j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");
     if (r.fitted) {
         Json f = Json::object();

@@ -1,6 +1,7 @@
 // The kept mesh (connectivity keep) against known answers: a noisy cube and octahedron come back with flat sides
 // at their true dihedral angles, a sphere does not drift, heavy noise turns no face over, the threads do not
-// matter; and the automatic spatial scale that follows the input's noise (auto_sigma_spatial).
+// matter, the engine runs only where its surface is used; and the automatic spatial scale that follows the input's
+// noise (auto_sigma_spatial).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -206,6 +207,47 @@ TEST(KeptFaces, ASphereDoesNotDriftAndHeavyNoiseTurnsNoFaceOver) {
     std::size_t newly = 0;
     for (std::size_t f = 0; f < before.size(); ++f) newly += after[f] && !before[f];
     EXPECT_LE(newly, before.size() / 200);
+}
+
+TEST(KeptFaces, TheEngineRunsOnlyWhereItsSurfaceIsUsed) {
+    // Kept on its own faces, nothing reads the smoothed volume but the guard: the engine does not run, its options
+    // change nothing, the memory check does not count it, and its options are still checked
+    const Mesh sphere = test::icosphere(1.0, 3);
+    Mesh noisy = sphere;
+    NoiseOptions n;
+    n.sigma = 0.3;
+    add_noise(noisy, n);
+    PipelineOptions o = kept();
+    o.scan.resolution = 64;
+    const PipelineResult faces = smooth_mesh(noisy, o);
+    EXPECT_FALSE(faces.report.smoothed);
+    EXPECT_EQ(faces.report.seconds.smooth, 0.0);
+    EXPECT_DOUBLE_EQ(faces.report.noise, estimate_noise(noisy).sigma);  // the stop still follows the noise
+    EXPECT_GE(faces.report.faces.rms_displacement, faces.report.noise);
+    PipelineOptions other = o;
+    other.smooth.iterations = 3;
+    other.smooth.sigma_spatial = 0.5;
+    EXPECT_EQ(smooth_mesh(noisy, other).mesh.positions, faces.mesh.positions);
+    other.smooth.iterations = -1;
+    EXPECT_THROW((void)smooth_mesh(noisy, other), InvalidInput);
+    // the memory the engine would need is not asked for: a limit between the two runs kept, not fitted
+    PipelineOptions engine = o, scan = o;
+    scan.smoothing = false;
+    const double with = check_memory(noisy, engine), without = check_memory(noisy, scan);
+    ASSERT_LT(without, with);
+    o.max_memory_bytes = std::size_t(0.5 * (with + without));
+    EXPECT_NO_THROW((void)smooth_mesh(noisy, o));
+    o.keep_filter = KeepFilter::Volume;
+    EXPECT_THROW((void)smooth_mesh(noisy, o), OutOfMemory);
+    // where the volume's surface is used, it is smoothed: the fit (keep-filter volume), auto's decision on a closed
+    // input, a re-meshing
+    o.max_memory_bytes = 0;
+    EXPECT_TRUE(smooth_mesh(noisy, o).report.smoothed);
+    o.keep_filter = KeepFilter::Faces;
+    o.connectivity = Connectivity::Auto;
+    EXPECT_TRUE(smooth_mesh(noisy, o).report.smoothed);
+    o.connectivity = Connectivity::Remesh;
+    EXPECT_TRUE(smooth_mesh(noisy, o).report.smoothed);
 }
 
 TEST(NoiseScale, AutoSigmaSpatialIsTwiceTheNoiseWithinAVoxelAndTheFixedValue) {
