@@ -498,12 +498,28 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
     const bool own_faces = o.keep_filter == KeepFilter::Faces;
     // A mesh kept and filtered on its own faces takes nothing from the engine but the guard's reference below (which
-    // side of the surface each face looks to): the input's own distance serves that, and the engine does not run (nor
-    // counts in the memory check). It runs wherever its surface is used: a re-meshed result, the fit, and auto's keep
-    // or re-mesh on a closed input.
-    const bool engine = o.smoothing && !(keep && own_faces);
+    // side of the surface each face looks to). On an open input the input's own distance serves that, and the engine
+    // does not run (nor counts in the memory check): on the open scans of the study the result is within 0.02° face by
+    // face. On a closed one the engine still runs: the noisy distance of the study's closed pairs (1.3 to 2.3 voxels
+    // of noise against 0.6 to 1.1 on the scans) turned faces the filter had right, and the guard moving them back cost
+    // 0.1 to 0.55° (docs/history/benchmarks-2026.md, "The kept mesh without the engine"). It runs wherever its surface
+    // is used too: a re-meshed result, the fit, and auto's keep or re-mesh on a closed input.
+    const bool engine = o.smoothing && !(keep && own_faces && open);
     PipelineOptions scan = o;
     scan.smoothing = engine;
+    if (!engine && keep && own_faces && o.scan.resolution == 0 && o.scan.voxel_size == 0) {
+        // The guard's volume alone: it tells which side of the surface a face looks to, by a gradient over two voxels
+        // that the noise cannot turn once a voxel is twice the noise (the automatic resolution puts 0.6 to 1.1 of the
+        // scans' noise in a voxel). Coarser than that it need not be finer.
+        r.noise = estimate_noise(m).sigma;
+        const Vec3d size = bounding_box(m).max - bounding_box(m).min;
+        const double longest = std::max({size.x, size.y, size.z});
+        const int automatic_resolution = auto_resolution(m, scan);
+        scan.scan.resolution = automatic_resolution;
+        if (r.noise > 0 && longest > 0)
+            scan.scan.resolution = std::clamp(int(std::ceil(longest / (2 * r.noise))),
+                                              std::min(kAutoResolutionMin, automatic_resolution), automatic_resolution);
+    }
     Volume v = mesh_to_volume(m, scan, &r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
     if (engine) smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr);
@@ -571,8 +587,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     FaceFilterOptions faces = o.faces;
     if (own_faces) {
         result.mesh = m;
-        // smooth_volume_stage measured it when the engine ran; otherwise it is measured here
-        if (!r.smoothed) r.noise = estimate_noise(m).sigma;
+        // smooth_volume_stage measured it when the engine ran, or the guard's resolution; otherwise it is measured here
+        if (!r.smoothed && r.noise == 0) r.noise = estimate_noise(m).sigma;
         faces.stop_displacement = r.noise;
         if (faces.normal_steps == 0) faces.normal_steps = faces.stop_displacement > 0 ? kMaxFaceRounds : 0;
     } else {

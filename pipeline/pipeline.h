@@ -72,8 +72,8 @@ enum class KeepFilter {
     /// most consistent patch, the vertices following, round after round until they have moved as far as
     /// the input's noise (estimate_noise; Morozov's discrepancy principle), at most kMaxFaceRounds. The
     /// smoothed volume decides Auto's keep on a closed input; the volume guards the result against faces that
-    /// turn over or intersect. Where the mesh is kept without that decision (Connectivity::Keep, or Auto on an
-    /// open input) the engine does not run: the guard's volume is the input's own distance.
+    /// turn over or intersect. On an open input (kept under Keep or Auto alike, no decision needed) the engine
+    /// does not run: the guard's volume is the input's own distance.
     Faces,
     /// The vertices fitted to the processed volume (fit_mesh_to_volume), then the face filter guided by
     /// the volume's normals (one round unless faces.normal_steps says otherwise): the paper's surface on
@@ -296,7 +296,7 @@ struct PipelineResult {
 /// Accepted input: what scan_convert accepts (any triangle soup; open sheets need
 /// scan.shell_thickness). The re-meshed result is closed and manifold (before decimation by
 /// construction); with options.connectivity Keep (Auto: for an open input) it is m itself with its
-/// vertices moved (options.keep_filter: its own faces filtered, and then the engine does not run; or
+/// vertices moved (options.keep_filter: its own faces filtered, with no engine run on an open m; or
 /// fitted to the volume, fit_mesh_to_volume), as open as m was. An open input re-meshed is trimmed to its
 /// footprint (trim_to_footprint), unless options.closed.
 /// Attributes: the result has vertex normals from the processed volume (set_volume_normals), or, kept on its own

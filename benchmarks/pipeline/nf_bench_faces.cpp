@@ -104,9 +104,18 @@ int main(int argc, char** argv) {
         d.normal_steps = 40;
         d.stop_displacement = discrepancy * estimate_noise(m).sigma;
         Stopwatch c;
-        const FaceFilterReport r = filter_faces(m, d);
-        std::printf("discrepancy %.2f: %d rounds, %.2f deg, %.2f s\n", discrepancy, r.rounds,
-                    correspondence_errors(m, gt).mean_face_angle_deg, c.lap());
+        std::vector<Vec3d> target;
+        const FaceFilterReport r = filter_faces(m, d, nullptr, nullptr, &target);
+        double miss = 0;
+        for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+            const Vec3d a = face_area_vector(m, m.triangles[f]);
+            if (norm(a) > 0 && norm(target[f]) > 0)
+                miss += std::acos(std::clamp(dot(a, target[f]) / norm(a), -1.0, 1.0)) * 57.29577951308232;
+        }
+        std::printf(
+            "discrepancy %.2f: %d rounds, %.2f deg, %.2f s, faces off their filtered normals %.2f deg, %zu reverted\n",
+            discrepancy, r.rounds, correspondence_errors(m, gt).mean_face_angle_deg, c.lap(),
+            miss / double(m.triangles.size()), r.reverted_moves);
         if (!out.empty()) write_mesh(out, m);
         return 0;
     }

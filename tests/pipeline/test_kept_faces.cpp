@@ -210,44 +210,87 @@ TEST(KeptFaces, ASphereDoesNotDriftAndHeavyNoiseTurnsNoFaceOver) {
 }
 
 TEST(KeptFaces, TheEngineRunsOnlyWhereItsSurfaceIsUsed) {
-    // Kept on its own faces, nothing reads the smoothed volume but the guard: the engine does not run, its options
-    // change nothing, the memory check does not count it, and its options are still checked
+    // An open input kept on its own faces reads nothing of the smoothed volume (the guard takes the input's own
+    // distance): the engine does not run, its options change nothing, the memory check does not count it, and its
+    // options are still checked
     const Mesh sphere = test::icosphere(1.0, 3);
     Mesh noisy = sphere;
     NoiseOptions n;
     n.sigma = 0.3;
     add_noise(noisy, n);
+    Mesh open = noisy;  // the cap above z = 0.6 cut off
+    std::erase_if(open.triangles, [&](const Tri& t) {
+        return open.positions[t[0]].z + open.positions[t[1]].z + open.positions[t[2]].z > 1.8f;
+    });
     PipelineOptions o = kept();
     o.scan.resolution = 64;
-    const PipelineResult faces = smooth_mesh(noisy, o);
+    const PipelineResult faces = smooth_mesh(open, o);
     EXPECT_FALSE(faces.report.smoothed);
     EXPECT_EQ(faces.report.seconds.smooth, 0.0);
-    EXPECT_DOUBLE_EQ(faces.report.noise, estimate_noise(noisy).sigma);  // the stop still follows the noise
+    EXPECT_DOUBLE_EQ(faces.report.noise, estimate_noise(open).sigma);  // the stop still follows the noise
     EXPECT_GE(faces.report.faces.rms_displacement, faces.report.noise);
     PipelineOptions other = o;
     other.smooth.iterations = 3;
     other.smooth.sigma_spatial = 0.5;
-    EXPECT_EQ(smooth_mesh(noisy, other).mesh.positions, faces.mesh.positions);
+    EXPECT_EQ(smooth_mesh(open, other).mesh.positions, faces.mesh.positions);
     other.smooth.iterations = -1;
-    EXPECT_THROW((void)smooth_mesh(noisy, other), InvalidInput);
+    EXPECT_THROW((void)smooth_mesh(open, other), InvalidInput);
     // the memory the engine would need is not asked for: a limit between the two runs kept, not fitted
-    PipelineOptions engine = o, scan = o;
+    PipelineOptions scan = o;
     scan.smoothing = false;
-    const double with = check_memory(noisy, engine), without = check_memory(noisy, scan);
+    const double with = check_memory(open, o), without = check_memory(open, scan);
     ASSERT_LT(without, with);
     o.max_memory_bytes = std::size_t(0.5 * (with + without));
-    EXPECT_NO_THROW((void)smooth_mesh(noisy, o));
+    EXPECT_NO_THROW((void)smooth_mesh(open, o));
     o.keep_filter = KeepFilter::Volume;
-    EXPECT_THROW((void)smooth_mesh(noisy, o), OutOfMemory);
-    // where the volume's surface is used, it is smoothed: the fit (keep-filter volume), auto's decision on a closed
-    // input, a re-meshing
+    EXPECT_THROW((void)smooth_mesh(open, o), OutOfMemory);
+    // auto keeps an open input without a decision: the same
     o.max_memory_bytes = 0;
-    EXPECT_TRUE(smooth_mesh(noisy, o).report.smoothed);
     o.keep_filter = KeepFilter::Faces;
     o.connectivity = Connectivity::Auto;
-    EXPECT_TRUE(smooth_mesh(noisy, o).report.smoothed);
-    o.connectivity = Connectivity::Remesh;
-    EXPECT_TRUE(smooth_mesh(noisy, o).report.smoothed);
+    EXPECT_FALSE(smooth_mesh(open, o).report.smoothed);
+    // where the smoothed surface is used, the engine runs: the guard of a closed input, auto's decision on one, the
+    // fit (keep-filter volume), a re-meshing
+    for (const Connectivity c : {Connectivity::Keep, Connectivity::Auto, Connectivity::Remesh}) {
+        o.connectivity = c;
+        EXPECT_TRUE(smooth_mesh(noisy, o).report.smoothed) << to_string(c);
+    }
+    o.connectivity = Connectivity::Keep;
+    o.keep_filter = KeepFilter::Volume;
+    EXPECT_TRUE(smooth_mesh(open, o).report.smoothed);
+}
+
+TEST(KeptFaces, AnOpenInputsGuardHasVoxelsOfTwiceItsNoise) {
+    // Without the engine the volume is the guard's alone: at the automatic resolution, or coarser so that a voxel is
+    // twice the noise (the gradient over two voxels then sees the surface, not the noise), but no coarser than the
+    // automatic resolution's floor; a resolution given stays
+    const Mesh sphere = test::icosphere(1.0, 5);
+    for (const double sigma : {0.1, 0.2, 0.6}) {  // below a voxel; between; beyond the floor
+        Mesh open = sphere;
+        NoiseOptions n;
+        n.sigma = sigma;
+        add_noise(open, n);
+        std::erase_if(open.triangles, [&](const Tri& t) {
+            return open.positions[t[0]].z + open.positions[t[1]].z + open.positions[t[2]].z > 1.8f;
+        });
+        PipelineOptions o = kept();
+        const PipelineReport r = smooth_mesh(open, o).report;
+        const int automatic = auto_resolution(open, o), resolution = r.scan_options.resolution;
+        const double noise = r.noise, h = r.scan.grid.voxel_size;
+        ASSERT_GT(noise, 0.0);
+        ASSERT_GT(automatic, kAutoResolutionMin);
+        const double automatic_voxel = h * resolution / automatic;  // the same box in more voxels
+        if (2 * noise <= automatic_voxel) {
+            EXPECT_EQ(resolution, automatic) << sigma;
+        } else if (2 * noise < h * resolution / kAutoResolutionMin) {
+            EXPECT_LT(resolution, automatic) << sigma;
+            EXPECT_NEAR(h, 2 * noise, 0.1 * 2 * noise) << sigma;
+        } else {
+            EXPECT_EQ(resolution, kAutoResolutionMin) << sigma;  // no coarser than the floor
+        }
+        o.scan.resolution = 100;
+        EXPECT_EQ(smooth_mesh(open, o).report.scan_options.resolution, 100);
+    }
 }
 
 TEST(NoiseScale, AutoSigmaSpatialIsTwiceTheNoiseWithinAVoxelAndTheFixedValue) {
