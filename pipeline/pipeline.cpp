@@ -502,15 +502,16 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     // does not run (nor counts in the memory check): on the open scans of the study the result is within 0.02° face by
     // face. On a closed one the engine still runs: the noisy distance of the study's closed pairs (1.3 to 2.3 voxels
     // of noise against 0.6 to 1.1 on the scans) turned faces the filter had right, and the guard moving them back cost
-    // 0.1 to 0.55° (docs/history/benchmarks-2026.md, "The kept mesh without the engine"). It runs wherever its surface
-    // is used too: a re-meshed result, the fit, and auto's keep or re-mesh on a closed input.
+    // 0.1 to 0.55° (docs/history/benchmarks-2026.md, "The stop rule's curves, and the kept mesh without the engine").
+    // It runs wherever its surface is used too: a re-meshed result, the fit, and auto's keep or re-mesh on a closed
+    // input.
     const bool engine = o.smoothing && !(keep && own_faces && open);
     PipelineOptions scan = o;
     scan.smoothing = engine;
     if (!engine && keep && own_faces && o.scan.resolution == 0 && o.scan.voxel_size == 0) {
         // The guard's volume alone: it tells which side of the surface a face looks to, by a gradient over two voxels
         // that the noise cannot turn once a voxel is twice the noise (the automatic resolution puts 0.6 to 1.1 of the
-        // scans' noise in a voxel). Coarser than that it need not be finer.
+        // scans' noise in a voxel); it need not be finer than that.
         r.noise = estimate_noise(m).sigma;
         const Vec3d size = bounding_box(m).max - bounding_box(m).min;
         const double longest = std::max({size.x, size.y, size.z});
@@ -615,8 +616,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward where
     // the input had them (halfway each round, all the way in the end), until none does: the kept mesh has no
     // intersection the input did not have. Nor may a face turn over against the volume's surface (smoothed, or the
-    // input's own where the engine did not run) where the input's face did not: its vertices move back the same way. Moving vertices back for one reason can break the other, so
-    // the two alternate until both hold.
+    // input's own where the engine did not run) where the input's face did not: its vertices move back the same way.
+    // Moving vertices back for one reason can break the other, so the two alternate until both hold.
     {
         const std::vector<char> input_against = faces_against_volume(m, v);
         r.input_flipped_faces = std::count(input_against.begin(), input_against.end(), char(1));
