@@ -2,6 +2,7 @@
 // checked, CGAL's local repair or edge collapse where a guarantee breaks; meshoptimizer and CGAL on request.
 #include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include "core/errors.h"
@@ -103,6 +104,7 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
     const MeshReport input = options.input_report ? *options.input_report : mesh_report(m);
     Mesh result;
     bool done = false;
+    std::optional<MeshReport> known;  // result's mesh_report where it was measured and the result kept since
     if (decimator == Decimator::Auto || decimator == Decimator::Quadric) {
         Stopwatch t;
         result = m;
@@ -136,6 +138,7 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
             rep.seconds_decimate += t.lap();
         }
 #endif
+        known = after;
         const std::string why = broken_guarantee(input, after, rep.self_intersections);
         done = why.empty() || decimator == Decimator::Quadric;
 #ifndef NORMALFLOW_HAS_CGAL
@@ -178,6 +181,7 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
             (other_pairs < rep.self_intersections || !broken_guarantee(input, mesh_report(result), -1).empty());
         if (cgal_better) {
             result = std::move(other);
+            known.reset();
             rep.decimator = "cgal";
             rep.self_intersections = other_pairs;
             rep.warnings.insert(rep.warnings.end(), cr.warnings.begin(), cr.warnings.end());
@@ -188,7 +192,7 @@ DecimationReport decimate_mesh(Mesh& m, const DecimationOptions& options) {
         }
     }
 #endif
-    const MeshReport out = mesh_report(result);
+    const MeshReport out = known ? *known : mesh_report(result);
     rep.closed = out.closed;
     rep.manifold = out.manifold;
     if (rep.decimator != "cgal") {  // CGAL's cleanup reported its own problems

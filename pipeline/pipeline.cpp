@@ -324,10 +324,17 @@ void compact_surface(Mesh& m, const Volume& v, const PipelineOptions& o, Pipelin
     detail::begin(progress, "decimate");
     set_volume_normals(m, v);
     Mesh decimated = m;
+    // The guarantees the decimation keeps are the extraction's, closed and manifold by construction (and kept by the
+    // removal of extra components and by sharpening, which move no edge): not measured again (0.45 s on 627,576 faces).
+    // A surface trimmed to an open input's footprint is measured.
+    MeshReport extracted;
+    extracted.closed = r.extract.closed;
+    extracted.manifold = r.extract.manifold;
     DecimationReport d = decimate_mesh(decimated, {.max_error = kCompactErrorVoxels * v.grid.voxel_size,
                                                    .decimator = Decimator::Quadric,  // the normal bound is its own
                                                    .tangent_planes = !o.sharpen,
                                                    .max_normal_deviation_deg = kCompactNormalDeviationDeg,
+                                                   .input_report = r.trimmed ? nullptr : &extracted,
                                                    .local_repair = true});
     r.decimate = d;
     r.decimated = true;
