@@ -108,9 +108,7 @@ ScanConvertOptions effective_scan_options(const PipelineOptions& o) {
 double check_memory(const Mesh& mesh, const PipelineOptions& o) {
     if (mesh.triangles.empty()) return 0;  // scan_convert gives the clear message
     const ScanConvertOptions s = effective_scan_options(o);
-    const Box3d box = bounding_box(mesh);
-    const Vec3d size = box.max - box.min;
-    const double longest = std::max({size.x, size.y, size.z});
+    const double longest = bounding_box(mesh).longest_side();
     const double h = s.voxel_size > 0 ? s.voxel_size : longest / s.resolution;
     if (!(h > 0) || !std::isfinite(h)) return 0;
     const MemoryEstimate e = estimate_memory(mesh, h, o.smoothing ? kEngineBandVoxels : s.half_width);
@@ -128,9 +126,7 @@ double check_memory(const Mesh& mesh, const PipelineOptions& o) {
 
 int auto_resolution(const Mesh& mesh, const PipelineOptions& options) {
     if (mesh.triangles.empty()) return kAutoResolutionMin;
-    const Box3d box = bounding_box(mesh);
-    const Vec3d size = box.max - box.min;
-    const double longest = std::max({size.x, size.y, size.z});
+    const double longest = bounding_box(mesh).longest_side();
     const double ell = options.length_scale > 0 ? options.length_scale : model_length_scale(mesh);
     double r = ell > 0 && longest > 0 ? std::ceil(kAutoVoxelsPerLength * longest / ell) : kAutoResolutionMin;
     int res = int(std::clamp(r, double(kAutoResolutionMin), double(kAutoResolutionMax)));
@@ -459,9 +455,7 @@ double median_edge_length(const Mesh& m) {
 double model_length_scale(const Mesh& m) {
     const double edge = median_edge_length(m);
     if (m.triangles.empty()) return edge;
-    const Box3d box = bounding_box(m);
-    const Vec3d size = box.max - box.min;
-    const double longest = std::max({size.x, size.y, size.z});
+    const double longest = bounding_box(m).longest_side();
     const double coarsest_unit = longest * kAutoVoxelsPerLength / kAutoResolutionMin;
     return coarsest_unit > 0 ? std::min(edge, coarsest_unit) : edge;
 }
@@ -520,8 +514,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         // that the noise cannot turn once a voxel is twice the noise (the automatic resolution puts 0.6 to 1.1 of the
         // scans' noise in a voxel); it need not be finer than that.
         r.noise = estimate_noise(m).sigma;
-        const Vec3d size = bounding_box(m).max - bounding_box(m).min;
-        const double longest = std::max({size.x, size.y, size.z});
+        const double longest = bounding_box(m).longest_side();
         const int automatic_resolution = auto_resolution(m, scan);
         scan.scan.resolution = automatic_resolution;
         if (r.noise > 0 && longest > 0)

@@ -130,9 +130,7 @@ int main(int argc, char** argv) {
     int failures = 0, within = 0, count = 0;
     for (const bench::Pair& p : pairs) {
         const std::string key = p.set + "/" + p.noisy_name;
-        if (!only.empty() && std::none_of(only.begin(), only.end(),
-                                          [&](const std::string& o) { return key.find(o) != std::string::npos; }))
-            continue;
+        if (!bench::selected(only, key)) continue;
         try {
             const Mesh gt = read_mesh(p.truth.string());
             Run prev, cur;

@@ -68,19 +68,19 @@ int main(int argc, char** argv) {
         const Mesh g = read_mesh(guide_path);
         for (const Tri& t : g.triangles) guidance.push_back(normalized(face_area_vector(g, t)));
     }
-    // the mean angle of per-face unit normals (zero: none) to the ground truth's faces, degrees
-    const auto mean_angle = [&](const std::vector<Vec3d>& normals) {
+    // the mean angle of per-face unit normals (zero: none) to the faces of ref (the ground truth unless given), degrees
+    const auto mean_angle = [&](const std::vector<Vec3d>& normals, const Mesh& ref) {
         double sum = 0;
         std::size_t count = 0;
         for (std::size_t f = 0; f < normals.size(); ++f) {
-            const Vec3d b = face_area_vector(gt, gt.triangles[f]);
+            const Vec3d b = face_area_vector(ref, ref.triangles[f]);
             if (!(norm(normals[f]) > 0) || !(norm(b) > 0)) continue;
             sum += std::acos(std::clamp(dot(normals[f], b) / norm(b), -1.0, 1.0)) * 57.29577951308232;
             ++count;
         }
         return count ? sum / double(count) : 0.0;
     };
-    if (!guidance.empty()) std::printf("the guidance itself: %.2f deg\n", mean_angle(guidance));
+    if (!guidance.empty()) std::printf("the guidance itself: %.2f deg\n", mean_angle(guidance, gt));
     const double before = correspondence_errors(m, gt).mean_face_angle_deg;
     if (trace > 0) {
         const double noise = estimate_noise(m).sigma;
@@ -106,16 +106,10 @@ int main(int argc, char** argv) {
         Stopwatch c;
         std::vector<Vec3d> target;
         const FaceFilterReport r = filter_faces(m, d, nullptr, nullptr, &target);
-        double miss = 0;
-        for (std::size_t f = 0; f < m.triangles.size(); ++f) {
-            const Vec3d a = face_area_vector(m, m.triangles[f]);
-            if (norm(a) > 0 && norm(target[f]) > 0)
-                miss += std::acos(std::clamp(dot(a, target[f]) / norm(a), -1.0, 1.0)) * 57.29577951308232;
-        }
         std::printf(
             "discrepancy %.2f: %d rounds, %.2f deg, %.2f s, faces off their filtered normals %.2f deg, %zu reverted\n",
-            discrepancy, r.rounds, correspondence_errors(m, gt).mean_face_angle_deg, c.lap(),
-            miss / double(m.triangles.size()), r.reverted_moves);
+            discrepancy, r.rounds, correspondence_errors(m, gt).mean_face_angle_deg, c.lap(), mean_angle(target, m),
+            r.reverted_moves);
         if (!out.empty()) write_mesh(out, m);
         return 0;
     }
@@ -140,7 +134,7 @@ int main(int argc, char** argv) {
         else
             ++rest, sum_rest += deg;
     }
-    std::printf("  the filtered normals themselves: %.2f deg\n", mean_angle(filtered));
+    std::printf("  the filtered normals themselves: %.2f deg\n", mean_angle(filtered, gt));
     const double all = double(over90 + over20 + rest);
     std::printf(
         "  share of the mean: over 90 deg %zu faces %.2f, 20-90 deg %zu faces %.2f, rest %zu faces %.2f (their mean "

@@ -25,6 +25,7 @@
 #include "io/io.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/pipeline.h"
+#include "study_pairs.h"
 
 namespace fs = std::filesystem;
 using namespace normalflow;
@@ -126,9 +127,7 @@ int main(int argc, char** argv) {
     std::fflush(stdout);
     int failures = 0;
     for (const Pair& p : pairs) {
-        if (!only.empty() && std::none_of(only.begin(), only.end(),
-                                          [&](const std::string& s) { return p.name.find(s) != std::string::npos; }))
-            continue;
+        if (!bench::selected(only, p.name)) continue;
         try {
             const Mesh noisy = read_mesh(p.noisy.string());
             const Mesh truth = read_mesh(p.truth.string());

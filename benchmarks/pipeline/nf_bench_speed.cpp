@@ -123,11 +123,7 @@ int main(int argc, char** argv) {
     for (const bench::Pair& p : bench::find_pairs(data)) inputs.push_back({p.set + "/" + p.noisy_name, p.noisy});
     for (const char* scan : {"real_scans/angel.ply", "real_scans/bun000_tri.ply"})
         if (fs::exists(data / scan)) inputs.push_back({scan, data / scan});
-    std::erase_if(inputs, [&](const Input& in) {
-        return !only.empty() && std::none_of(only.begin(), only.end(), [&](const std::string& o) {
-            return in.name.find(o) != std::string::npos;
-        });
-    });
+    std::erase_if(inputs, [&](const Input& in) { return !bench::selected(only, in.name); });
     const fs::path tmp = fs::temp_directory_path() / ("nf_bench_speed_" + std::to_string(::getpid()));
     fs::create_directories(tmp);
     const Mesh yard_mesh = read_mesh(yard_path.string());

@@ -26,6 +26,12 @@ inline std::string published_label(const std::string& file) {
     return "published result";
 }
 
+/// Whether a benchmark's --only filters (substrings, none: everything) select the input named key.
+inline bool selected(const std::vector<std::string>& only, const std::string& key) {
+    return only.empty() || std::any_of(only.begin(), only.end(),
+                                       [&](const std::string& o) { return key.find(o) != std::string::npos; });
+}
+
 /// The pairs of shared/data, following SOURCES.md: X_<noise>.ply with X_gt.ply in the same folder;
 /// pairs_nllr's nicolo_i2 takes pairs_gnf/nicolo_gt.ply, and NLLR's julius result belongs to
 /// pairs_gnf/julius_n0.2.ply (the same noisy mesh up to 1e-7).

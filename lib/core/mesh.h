@@ -58,6 +58,10 @@ struct Box3d {
     Vec3d size() const { return empty() ? Vec3d{} : max - min; }
     Vec3d center() const { return (min + max) * 0.5; }
     double diagonal() const { return empty() ? 0.0 : norm(max - min); }
+    double longest_side() const {
+        const Vec3d s = size();
+        return s.x > s.y ? (s.x > s.z ? s.x : s.z) : (s.y > s.z ? s.y : s.z);
+    }
     void extend(const Vec3d& p) {
         min = cwise_min(min, p);
         max = cwise_max(max, p);

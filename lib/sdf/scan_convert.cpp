@@ -221,8 +221,7 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
     for (const Tri& t : m.triangles)
         for (int c = 0; c < 3; ++c) box.extend(Vec3d(m.positions[t[c]]));
     const Vec3d size = box.size();
-    const double longest = std::max({size.x, size.y, size.z});
-    const double h = opt.voxel_size > 0 ? opt.voxel_size : longest / opt.resolution;
+    const double h = opt.voxel_size > 0 ? opt.voxel_size : box.longest_side() / opt.resolution;
     if (!(h > 0))
         throw InvalidInput("scan_convert: the mesh has zero extent; set voxel_size to choose the grid spacing");
     const double hw = opt.half_width;

@@ -103,6 +103,13 @@ double dihedral_error(const Sides& clean, const Sides& kept) {
     return worst;
 }
 
+/// m less its faces whose centroid lies above z = 0.6: a unit sphere opened at the top.
+Mesh without_cap(Mesh m) {
+    std::erase_if(m.triangles,
+                  [&](const Tri& t) { return m.positions[t[0]].z + m.positions[t[1]].z + m.positions[t[2]].z > 1.8f; });
+    return m;
+}
+
 PipelineOptions kept() {
     PipelineOptions o;
     o.connectivity = Connectivity::Keep;
@@ -218,10 +225,7 @@ TEST(KeptFaces, TheEngineRunsOnlyWhereItsSurfaceIsUsed) {
     NoiseOptions n;
     n.sigma = 0.3;
     add_noise(noisy, n);
-    Mesh open = noisy;  // the cap above z = 0.6 cut off
-    std::erase_if(open.triangles, [&](const Tri& t) {
-        return open.positions[t[0]].z + open.positions[t[1]].z + open.positions[t[2]].z > 1.8f;
-    });
+    const Mesh open = without_cap(noisy);
     PipelineOptions o = kept();
     o.scan.resolution = 64;
     const PipelineResult faces = smooth_mesh(open, o);
@@ -266,13 +270,11 @@ TEST(KeptFaces, AnOpenInputsGuardHasVoxelsOfTwiceItsNoise) {
     // automatic resolution's floor; a resolution given stays
     const Mesh sphere = test::icosphere(1.0, 5);
     for (const double sigma : {0.1, 0.2, 0.6}) {  // below a voxel; between; beyond the floor
-        Mesh open = sphere;
+        Mesh noisy = sphere;
         NoiseOptions n;
         n.sigma = sigma;
-        add_noise(open, n);
-        std::erase_if(open.triangles, [&](const Tri& t) {
-            return open.positions[t[0]].z + open.positions[t[1]].z + open.positions[t[2]].z > 1.8f;
-        });
+        add_noise(noisy, n);
+        const Mesh open = without_cap(noisy);
         PipelineOptions o = kept();
         const PipelineReport r = smooth_mesh(open, o).report;
         const int automatic = auto_resolution(open, o), resolution = r.scan_options.resolution;
