@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numbers>
 #include <string>
@@ -157,12 +158,43 @@ double sampled_max_distance(const Mesh& from, const Mesh& to, int samples_per_fa
     if (from.triangles.empty() || to.triangles.empty()) return 0.0;
     const auto query = make_bvh_query(to);
     const auto pts = sample_points(from, samples_per_face);
-    std::vector<double> d(pts.size(), 0.0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size(), 1024), [&](const auto& r) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) d[i] = query->closest(pts[i]).squared_distance;
+    // Only the largest distance is wanted: a point with a triangle closer than the largest distance found so far
+    // (its block's: a lower bound of the answer) cannot raise it, and the search within that radius is short. The
+    // points that may raise it are measured exactly. Every point's distance is then either measured or below a
+    // measured one, so the maximum is exact, whatever the blocks and threads. A sparse pass first gives each block a
+    // bound to start from.
+    constexpr std::size_t kStride = 64;
+    double seed = 0.0;
+    {
+        const std::size_t sparse = (pts.size() + kStride - 1) / kStride;
+        std::vector<double> d(sparse, 0.0);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, sparse, 256), [&](const auto& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i) d[i] = query->closest(pts[i * kStride]).squared_distance;
+        });
+        for (double x : d) seed = std::max(seed, x);
+    }
+    const std::size_t blocks = (pts.size() + 1023) / 1024;
+    std::vector<double> block_max(blocks, seed);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& r) {
+        for (std::size_t b = r.begin(); b < r.end(); ++b) {
+            double mx = seed;
+            std::uint32_t hint = ClosestHit::kNone;
+            for (std::size_t i = b * 1024; i < std::min(pts.size(), (b + 1) * 1024); ++i) {
+                // a triangle strictly closer than the bound: the point cannot raise it
+                const ClosestHit near = query->closest_within(pts[i], mx, hint);
+                if (near.found()) {
+                    hint = near.triangle;
+                    continue;
+                }
+                const ClosestHit h = query->closest_within(pts[i], std::numeric_limits<double>::infinity(), hint);
+                hint = h.triangle;
+                mx = std::max(mx, h.squared_distance);
+            }
+            block_max[b] = mx;
+        }
     });
-    double mx = 0.0;
-    for (double x : d) mx = std::max(mx, x);
+    double mx = seed;
+    for (double x : block_max) mx = std::max(mx, x);
     return std::sqrt(mx);
 }
 

@@ -48,8 +48,11 @@ SurfaceDistance surface_distance(const Mesh& a, const Mesh& b, const SurfaceSamp
 /// The largest distance from the points of `from` (its vertices, then samples_per_face points per
 /// face at fixed barycentric coordinates: the centroid, three towards the corners, three edge
 /// midpoints; at most 7) to the triangles of `to`, world units; 0 when either has no triangles.
-/// Deterministic (no random samples) and independent of the thread count.
-/// Cost: a BVH of `to` plus one exact closest-point query per point, TBB parallel.
+/// Deterministic (no random samples) and independent of the thread count; exact: the largest of the points'
+/// exact distances.
+/// Cost: a BVH of `to`, an exact closest-point query for every 64th point (the first bound), then for each point a
+/// search within the largest distance its block has found so far, and an exact query only where none is that close;
+/// TBB parallel.
 double sampled_max_distance(const Mesh& from, const Mesh& to, int samples_per_face = 3);
 
 /// Both one-sided sampled_max_distance values and their maximum.

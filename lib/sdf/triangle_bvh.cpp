@@ -10,12 +10,20 @@
 namespace normalflow::detail {
 namespace {
 
+/// A triangle as the split sees it: its centroid beside its index, so that the median search and the centroid
+/// bounds read contiguous memory (an index into a separate centroid array made each comparison a cache miss: 3.1 s
+/// for a 5.1 M-face extraction).
+struct Item {
+    Vec3d centroid;
+    std::uint32_t triangle;
+};
+
 struct Builder {
     std::vector<BvhNode>& nodes;
     std::vector<std::uint32_t>& order;
+    std::vector<Item>& items;
     const std::vector<Vec3d>& lo;
     const std::vector<Vec3d>& hi;
-    const std::vector<Vec3d>& centroid;
     std::size_t leaf;
 
     // Number of nodes a subtree over n triangles uses (splits are always at n / 2).
@@ -25,30 +33,33 @@ struct Builder {
 
     void build(std::size_t node, std::size_t begin, std::size_t end) {
         BvhNode& nd = nodes[node];
-        Vec3d blo{1e300, 1e300, 1e300}, bhi{-1e300, -1e300, -1e300};
-        Vec3d clo = blo, chi = bhi;
-        for (std::size_t i = begin; i < end; ++i) {
-            const std::uint32_t t = order[i];
-            blo = cwise_min(blo, lo[t]);
-            bhi = cwise_max(bhi, hi[t]);
-            clo = cwise_min(clo, centroid[t]);
-            chi = cwise_max(chi, centroid[t]);
-        }
-        nd.lo = blo;
-        nd.hi = bhi;
         const std::size_t n = end - begin;
         if (n <= leaf) {
+            Vec3d blo{1e300, 1e300, 1e300}, bhi{-1e300, -1e300, -1e300};
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t t = items[i].triangle;
+                order[i] = t;
+                blo = cwise_min(blo, lo[t]);
+                bhi = cwise_max(bhi, hi[t]);
+            }
+            nd.lo = blo;
+            nd.hi = bhi;
             nd.first = std::uint32_t(begin);
             nd.count = std::uint32_t(n);
             return;
         }
+        Vec3d clo{1e300, 1e300, 1e300}, chi{-1e300, -1e300, -1e300};
+        for (std::size_t i = begin; i < end; ++i) {
+            clo = cwise_min(clo, items[i].centroid);
+            chi = cwise_max(chi, items[i].centroid);
+        }
         const Vec3d ext = chi - clo;
         const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
         const std::size_t mid = begin + n / 2;
-        std::nth_element(order.begin() + std::ptrdiff_t(begin), order.begin() + std::ptrdiff_t(mid),
-                         order.begin() + std::ptrdiff_t(end), [&](std::uint32_t a, std::uint32_t b) {
-                             const double ca = centroid[a][axis], cb = centroid[b][axis];
-                             return ca < cb || (ca == cb && a < b);
+        std::nth_element(items.begin() + std::ptrdiff_t(begin), items.begin() + std::ptrdiff_t(mid),
+                         items.begin() + std::ptrdiff_t(end), [&](const Item& a, const Item& b) {
+                             const double ca = a.centroid[axis], cb = b.centroid[axis];
+                             return ca < cb || (ca == cb && a.triangle < b.triangle);
                          });
         const std::size_t left = node + 1;
         const std::size_t right = left + count_nodes(n / 2);
@@ -63,6 +74,9 @@ struct Builder {
             build(left, begin, mid);
             build(right, mid, end);
         }
+        // the box of the triangles below: the children's
+        nd.lo = cwise_min(nodes[left].lo, nodes[right].lo);
+        nd.hi = cwise_max(nodes[left].hi, nodes[right].hi);
     }
 };
 
@@ -70,19 +84,19 @@ struct Builder {
 
 void TriangleBvh::build(const Mesh& m, int leaf_size) {
     const std::size_t nf = m.triangles.size();
-    std::vector<Vec3d> lo(nf), hi(nf), centroid(nf);
+    std::vector<Vec3d> lo(nf), hi(nf);
+    std::vector<Item> items(nf);
     for (std::size_t f = 0; f < nf; ++f) {
         const Tri& t = m.triangles[f];
         const Vec3d a(m.positions[t[0]]), b(m.positions[t[1]]), c(m.positions[t[2]]);
         lo[f] = cwise_min(a, cwise_min(b, c));
         hi[f] = cwise_max(a, cwise_max(b, c));
-        centroid[f] = (a + b + c) / 3.0;
+        items[f] = {(a + b + c) / 3.0, std::uint32_t(f)};
     }
     order.resize(nf);
-    for (std::size_t f = 0; f < nf; ++f) order[f] = std::uint32_t(f);
     nodes.clear();
     if (nf == 0) return;
-    Builder b{nodes, order, lo, hi, centroid, std::size_t(std::max(1, leaf_size))};
+    Builder b{nodes, order, items, lo, hi, std::size_t(std::max(1, leaf_size))};
     nodes.resize(b.count_nodes(nf));
     b.build(0, 0, nf);
 }

@@ -1,6 +1,7 @@
 // Tests for lib/metrics/surface_distance.h: analytic cases with known answers, properties, bad input.
 #include "metrics/surface_distance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -8,6 +9,7 @@
 #include <tbb/global_control.h>
 
 #include "core/errors.h"
+#include "sdf/closest_triangle.h"
 #include "sdf_test_meshes.h"
 
 namespace normalflow {
@@ -108,6 +110,46 @@ TEST(SurfaceDistance, SamplesAreUniformByArea) {
     EXPECT_GT(d.mean, 9.8 - 0.5);  // 0.5: a few standard deviations of the sampled fraction
     EXPECT_LT(d.mean, 10.25 + 0.5);
     EXPECT_NEAR(d.max_b_to_a, 0.1, 1e-6);
+}
+
+TEST(SurfaceDistance, SampledMaxDistanceIsTheLargestOfItsPointsWhateverItSkips) {
+    // sampled_max_distance searches in full only the points that may raise the largest distance found so far. Its
+    // answer must be the largest of all its points' exact distances, measured here one by one by brute force: the
+    // vertices and the centroids (samples_per_face = 1) of a bumpy sphere with one spike, to a sphere.
+    Mesh from = test::icosphere(1.0, 3);
+    for (std::size_t i = 0; i < from.positions.size(); ++i) {
+        const double bump = 1.0 + 0.02 * std::sin(37.0 * double(i));  // deterministic, in [0.98, 1.02]
+        from.positions[i] = Vec3f(Vec3d(from.positions[i]) * bump);
+    }
+    from.positions[from.positions.size() / 3] = from.positions[from.positions.size() / 3] * 1.25f;  // the spike
+    const Mesh to = test::icosphere(1.0, 4);
+    const auto brute = make_brute_force_query(to);
+    double expected = 0.0;
+    for (const Vec3f& p : from.positions) expected = std::max(expected, brute->closest(Vec3d(p)).squared_distance);
+    for (const Tri& t : from.triangles) {
+        Vec3d c(0, 0, 0);
+        for (int k = 0; k < 3; ++k) c = c + Vec3d(from.positions[t[k]]) * (1.0 / 3);  // as sample_points
+        expected = std::max(expected, brute->closest(c).squared_distance);
+    }
+    expected = std::sqrt(expected);
+    EXPECT_GT(expected, 0.2);  // the spike's
+    EXPECT_DOUBLE_EQ(sampled_max_distance(from, to, 1), expected);
+    // without the spike: the largest bump, found among many points of about the same distance
+    Mesh bumpy = from;
+    bumpy.positions[from.positions.size() / 3] = bumpy.positions[from.positions.size() / 3] / 1.25f;
+    double bump_max = 0.0;
+    for (const Vec3f& p : bumpy.positions) bump_max = std::max(bump_max, brute->closest(Vec3d(p)).squared_distance);
+    for (const Tri& t : bumpy.triangles) {
+        Vec3d c(0, 0, 0);
+        for (int k = 0; k < 3; ++k) c = c + Vec3d(bumpy.positions[t[k]]) * (1.0 / 3);
+        bump_max = std::max(bump_max, brute->closest(c).squared_distance);
+    }
+    EXPECT_LT(std::sqrt(bump_max), 0.03);
+    EXPECT_DOUBLE_EQ(sampled_max_distance(bumpy, to, 1), std::sqrt(bump_max));
+    {
+        tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+        EXPECT_DOUBLE_EQ(sampled_max_distance(bumpy, to, 1), std::sqrt(bump_max));
+    }
 }
 
 TEST(SurfaceDistance, BadInput) {
