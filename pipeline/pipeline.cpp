@@ -523,17 +523,46 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     }
     Volume v = mesh_to_volume(m, scan, &r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
-    if (engine) smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr);
+    // A closed input kept on its own faces reads the engine's volume only for the guard, and auto's keep or re-mesh
+    // only for the fit angle below: both read the surface of the engine's first iteration, and the engine goes on
+    // only for a surface that is re-meshed. On the study's closed pairs the first iteration's fit angle keeps and
+    // re-meshes the same pairs as the last one's (kept 1.40 to 2.31°, re-meshed 3.44 to 5.71°; docs/history/
+    // benchmarks-2026.md, "The keep decision after the first iteration").
+    // The fit of the input to a smoothed surface: the kept result where the fit is (KeepFilter::Volume, Fit), and auto's
+    // keep or re-mesh on a closed input: it is kept when its fitted faces agree with the volume's normals
+    // (kAutoKeepFitAngleDeg), the noise having moved its vertices across the surface only, not along it.
+    const auto fit_to = [&](Mesh& fitted, const Volume& surface) {
+        fitted = m;
+        r.fit = fit_mesh_to_volume(fitted, surface, o.fit, normal_map[0].values.empty() ? nullptr : &normal_map);
+        r.fitted = true;
+        if (automatic && !open) keep = keep || r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
+    };
+    bool decided = false;
+    double decision_seconds = 0;
+    const SmoothCheckpoint go_on = [&](const Volume& surface) {
+        if (!decided) {
+            Stopwatch clock;
+            if (automatic && !open) {
+                Mesh fitted;
+                fit_to(fitted, surface);
+            }
+            decided = true;
+            decision_seconds += clock.lap();
+        }
+        return !keep;
+    };
+    const bool early = own_faces && !open && (keep || automatic);
+    if (engine) {
+        smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr,
+                            early ? &go_on : nullptr);
+        r.seconds.smooth -= decision_seconds;  // the fit counts with the extraction, as below
+        r.seconds.extract += decision_seconds;
+    }
     Stopwatch fit_clock;
     Mesh fitted;
-    if ((keep && !own_faces) || (automatic && !open)) {
-        // A closed input is kept when its fitted faces agree with the volume's normals (kAutoKeepFitAngleDeg):
-        // the noise moved its vertices across the surface only, not along it.
+    if ((keep && !own_faces) || (automatic && !open && !decided)) {
         detail::begin(progress, "fit");
-        fitted = m;
-        r.fit = fit_mesh_to_volume(fitted, v, o.fit, normal_map[0].values.empty() ? nullptr : &normal_map);
-        r.fitted = true;
-        if (!keep) keep = r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
+        fit_to(fitted, v);
         const double seconds = fit_clock.lap();
         r.seconds.extract += seconds;
         r.seconds.total += seconds;
@@ -655,7 +684,8 @@ double auto_sigma_spatial(double noise, double length_unit, double voxel_size) {
 }
 
 void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_length_scale, double noise,
-                         PipelineReport* report, Progress* progress, NormalMap* normal_map) {
+                         PipelineReport* report, Progress* progress, NormalMap* normal_map,
+                         const SmoothCheckpoint* checkpoint) {
     PipelineReport local;
     PipelineReport& r = report ? *report : local;
     Stopwatch clock;
@@ -669,7 +699,7 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_len
     r.noise = noise;
     if (so.sigma_spatial == 0) so.sigma_spatial = float(auto_sigma_spatial(noise, r.length_scale, v.grid.voxel_size));
     r.sigma_spatial = so.sigma_spatial;
-    r.smooth = smooth_volume(v, so, progress, normal_map);
+    r.smooth = smooth_volume(v, so, progress, normal_map, checkpoint);
     r.smoothed = true;
     append(r.warnings, r.smooth.warnings);
     r.seconds.smooth = clock.lap();
@@ -677,8 +707,9 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_len
 }
 
 void smooth_volume_stage(Volume& v, const PipelineOptions& o, const Mesh& input, PipelineReport* report,
-                         Progress* progress, NormalMap* normal_map) {
-    smooth_volume_stage(v, o, model_length_scale(input), estimate_noise(input).sigma, report, progress, normal_map);
+                         Progress* progress, NormalMap* normal_map, const SmoothCheckpoint* checkpoint) {
+    smooth_volume_stage(v, o, model_length_scale(input), estimate_noise(input).sigma, report, progress, normal_map,
+                        checkpoint);
 }
 
 PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress* progress, bool want_mesh,

@@ -351,14 +351,16 @@ double auto_sigma_spatial(double noise, double length_unit, double voxel_size);
 /// The smoothing stage of smooth_mesh on its own: smooth_volume on v with options.smooth, its length
 /// unit (when options.smooth.length_scale is 0) options.length_scale, else default_length_scale (world
 /// units), and its sigma_spatial (when 0) auto_sigma_spatial of noise (world units; 0: unknown). Fills
-/// report's length_scale, noise, sigma_spatial, smoothed, smooth, seconds.smooth and warnings.
+/// report's length_scale, noise, sigma_spatial, smoothed, smooth, seconds.smooth and warnings. checkpoint
+/// (optional): smooth_volume's, asked after each main iteration but the last whether to go on.
 void smooth_volume_stage(Volume& v, const PipelineOptions& options, double default_length_scale, double noise = 0,
                          PipelineReport* report = nullptr, Progress* progress = nullptr,
-                         NormalMap* normal_map = nullptr);
+                         NormalMap* normal_map = nullptr, const SmoothCheckpoint* checkpoint = nullptr);
 /// smooth_volume_stage of a volume scan-converted from input: the length unit and the noise are input's
 /// (model_length_scale, estimate_noise).
 void smooth_volume_stage(Volume& v, const PipelineOptions& options, const Mesh& input, PipelineReport* report = nullptr,
-                         Progress* progress = nullptr, NormalMap* normal_map = nullptr);
+                         Progress* progress = nullptr, NormalMap* normal_map = nullptr,
+                         const SmoothCheckpoint* checkpoint = nullptr);
 
 /// smooth_mesh for a volume (a level set, or an image made into one, image_to_volume): smooths v in place
 /// (options.smoothing; the length unit kVolumeLengthScaleVoxels voxels unless options.length_scale) and

@@ -79,6 +79,7 @@ Json to_json(const SmoothReport& r) {
     j.set("volume_shift", Json::array(shift)).set("roughness", Json::array(rough));
     j.set("stopped_unchanged", r.stopped_unchanged)
         .set("stopped_smooth", r.stopped_smooth)
+        .set("stopped_at_checkpoint", r.stopped_at_checkpoint)
         .set("seconds_normals", r.seconds_normals)
         .set("seconds_refit", r.seconds_refit)
         .set("seconds_reinit", r.seconds_reinit)

@@ -139,6 +139,9 @@ void stop_notes(const PipelineOptions& opt, const PipelineReport& r, FileRun& f)
     if (r.smooth.stopped_smooth)
         f.notes.push_back("stopped after main iteration " + std::to_string(r.smooth.iterations_run()) +
                           ": the filtered normal map is smooth at the filter's scale");
+    if (r.smooth.stopped_at_checkpoint)
+        f.notes.push_back("smoothing stopped after main iteration " + std::to_string(r.smooth.iterations_run()) +
+                          ": the mesh is kept on its own faces, which read nothing more of the volume");
 }
 
 FileRun voxelize_file(const std::string& input, const std::string& output, const RunOptions& run,

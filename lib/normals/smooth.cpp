@@ -56,7 +56,7 @@ float working_limit(const SmoothOptions& opt) { return std::min(engine::kHalfWid
 /// The main iterations on a band with a surface (opt's defaults resolved); iterations_given: the
 /// caller set SmoothOptions::iterations (then no early stop when the normal map is smooth).
 void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progress* progress, bool iterations_given,
-         NormalMap* normal_map) {
+         NormalMap* normal_map, const SmoothCheckpoint* checkpoint, Volume& v) {
     using namespace engine;
     RunControl ctl(progress, opt.iterations);
     StageContext c{band, opt, rep, ctl};
@@ -104,14 +104,28 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
         const bool unchanged = filter && record.refit_steps == 0;
         // The filter left the normal map smooth at its disc's scale: this iteration is the last.
         const bool smooth_enough = auto_stop && record.roughness < kNeighbourhoodRoughness;
+        const bool more = it + 1 < opt.iterations && !unchanged && !smooth_enough;
         const auto t2 = Clock::now();
         if (!(unchanged && band.reinit_limit() >= kHalfWidth)) {
             band.update_band();
-            band.reinitialise(it + 1 < opt.iterations && !unchanged && !smooth_enough ? working_limit(opt) : kHalfWidth,
-                              ctl);
+            band.reinitialise(more ? working_limit(opt) : kHalfWidth, ctl);
         }
         rep.seconds_reinit += seconds_since(t2);
         record.seconds = seconds_since(t_it);
+        // The checkpoint reads φ as the next iteration would (exact within working_limit, the surface and the
+        // samples next to it), and the band is left as it was: a run it lets go on is the one without it.
+        if (more && checkpoint && *checkpoint) {
+            band.write_back(v);
+            if (!(*checkpoint)(v)) {
+                const auto t3 = Clock::now();
+                band.update_band();  // as a last iteration ends: φ out to the half width
+                band.reinitialise(kHalfWidth, ctl);
+                rep.seconds_reinit += seconds_since(t3);
+                rep.stopped_at_checkpoint = true;
+                ctl.finish();
+                break;
+            }
+        }
         if (smooth_enough && !unchanged && it + 1 < opt.iterations) {
             rep.stopped_smooth = true;
             ctl.finish();
@@ -182,7 +196,8 @@ int default_normal_steps(SmoothMode mode) {
     return filter ? filter->default_normal_steps() : engine::kDiffusionSteps;
 }
 
-SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress, NormalMap* normal_map) {
+SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress, NormalMap* normal_map,
+                           const SmoothCheckpoint* checkpoint) {
     validate(v, options);
     SmoothReport rep;
     if (options.normal_dt > engine::kMaxDt)
@@ -201,7 +216,7 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
             rep.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");
             return;
         }
-        run(band, opt, rep, progress, options.iterations != 0, normal_map);
+        run(band, opt, rep, progress, options.iterations != 0, normal_map, checkpoint, v);
         band.write_back(v);
     };
     if (options.threads > 0) {

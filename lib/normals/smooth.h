@@ -6,6 +6,7 @@
 /// second-order baseline.
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -213,8 +214,19 @@ struct SmoothReport {
     bool stopped_smooth = false;  ///< the surface-sample filters with iterations = 0: stopped before
                                   ///< kNeighbourhoodIterations because an iteration's filter left a
                                   ///< roughness below kNeighbourhoodRoughness
+    bool stopped_at_checkpoint =
+        false;  ///< the caller's SmoothCheckpoint stopped the run (iterations.size() tells when)
     int iterations_run() const { return int(iterations.size()); }
 };
+
+/// Called by smooth_volume after each main iteration that is not its last, with the volume as that iteration left it
+/// (φ reinitialised as the next iteration reads it: exact within active_band + 3 voxels of the surface, beyond that
+/// as the iteration found it): false stops the run there, φ then reinitialised out to the half width as on any return
+/// (SmoothReport::stopped_at_checkpoint; the second reinitialisation moves the interface by a few hundredths of a
+/// voxel against a run that ended there). For a caller that needs the rest of the run only if something about the
+/// surface so far holds: the pipeline decides from the first iteration's surface whether to keep a closed input's
+/// mesh, which reads nothing more of the volume. A run the checkpoint lets go on is bit for bit the one without it.
+using SmoothCheckpoint = std::function<bool(const Volume&)>;
 
 /// Smooths the surface {φ = 0} of a signed distance volume by the method of Tasdizen et al. 2003.
 ///
@@ -246,6 +258,8 @@ struct SmoothReport {
 ///                 to, on the band of that iteration (its active samples; kNoNormal elsewhere): the
 ///                 targets fit_mesh_to_volume turns a kept mesh's faces to. Left empty for
 ///                 MeanCurvature (no normal map) and for a volume without a surface.
+/// \param checkpoint optional: asked after each main iteration but the last whether to go on (SmoothCheckpoint);
+///                 it runs on smooth_volume's threads (opt.threads).
 ///
 /// Accepted input: any Volume whose allocated blocks hold the surface (a band of >= 1 voxel each
 /// side) and whose unallocated blocks are tiled with the right sign. Open or many-component
@@ -264,7 +278,7 @@ struct SmoothReport {
 /// threads via TBB over blocks, each step writes a second buffer and reductions are summed in a
 /// fixed order, so the result is bit-identical for any thread count.
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt = {}, Progress* progress = nullptr,
-                           NormalMap* normal_map = nullptr);
+                           NormalMap* normal_map = nullptr, const SmoothCheckpoint* checkpoint = nullptr);
 
 /// Checks every field of opt as smooth_volume does before any work; a caller that does other work first (the
 /// pipeline's scan conversion) checks them up front with it.

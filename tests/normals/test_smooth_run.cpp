@@ -316,6 +316,64 @@ TEST(SmoothVolume, StopsWhenARefitKeepsNoStepAndTheResultIsThatOfMoreIterations)
     EXPECT_EQ(rc.iterations_run(), 3);
 }
 
+TEST(SmoothVolume, ACheckpointThatGoesOnChangesNothingAndOneThatStopsEndsTheRunThere) {
+    Volume noisy = make_volume(40, 1.0, sphere_sdf(Vec3d(20.2, 19.8, 20.1), 12.0));
+    add_noise(noisy, 0.3, 7u);
+    const SmoothOptions o = options(SmoothMode::Bilateral, 3);
+    Volume plain = noisy;
+    const SmoothReport rp = smooth_volume(plain, o);
+    ASSERT_EQ(rp.iterations_run(), 3);
+    // asked after iterations 1 and 2 (not after the last), each time with the surface moved by the run so far
+    int asked = 0;
+    std::vector<Volume> seen;
+    const SmoothCheckpoint go_on = [&](const Volume& v) {
+        ++asked;
+        seen.push_back(v);
+        return true;
+    };
+    Volume a = noisy;
+    const SmoothReport ra = smooth_volume(a, o, nullptr, nullptr, &go_on);
+    EXPECT_EQ(asked, 2);
+    EXPECT_EQ(ra.iterations_run(), 3);
+    EXPECT_FALSE(ra.stopped_at_checkpoint);
+    EXPECT_EQ(a.values, plain.values);  // bit for bit the run without it
+    EXPECT_EQ(a.block_table, plain.block_table);
+    ASSERT_EQ(seen.size(), 2u);
+    EXPECT_NE(seen[0].values, seen[1].values);
+    // one that stops after the first iteration: that iteration's surface, reinitialised out to the half width as any
+    // run returns it. A one-iteration run reinitialises once where this one did twice (for the checkpoint, then out
+    // to the half width), and each reinitialisation moves the interface samples a little: within a few hundredths of
+    // a voxel
+    const SmoothCheckpoint stop = [](const Volume&) { return false; };
+    Volume b = noisy;
+    const SmoothReport rb = smooth_volume(b, o, nullptr, nullptr, &stop);
+    EXPECT_EQ(rb.iterations_run(), 1);
+    EXPECT_TRUE(rb.stopped_at_checkpoint);
+    EXPECT_EQ(b.half_width, 8.0f);
+    std::size_t checked = 0;
+    EXPECT_LT(eikonal_residual(b, &checked), 5e-3);
+    EXPECT_GT(checked, 10000u);
+    SmoothOptions one = o;
+    one.iterations = 1;
+    Volume c = noisy;
+    smooth_volume(c, one);
+    double near_diff = 0.0;
+    for (int k = 0; k < 40; ++k)
+        for (int j = 0; j < 40; ++j)
+            for (int i = 0; i < 40; ++i)
+                if (std::abs(c.value(i, j, k)) < 2.0)
+                    near_diff = std::max(near_diff, double(std::abs(b.value(i, j, k) - c.value(i, j, k))));
+    EXPECT_LT(near_diff, 0.05);
+    // and the one-iteration surface differs from the three-iteration one (the stop did stop)
+    double moved = 0.0;
+    for (int k = 0; k < 40; ++k)
+        for (int j = 0; j < 40; ++j)
+            for (int i = 0; i < 40; ++i)
+                if (std::abs(c.value(i, j, k)) < 2.0)
+                    moved = std::max(moved, double(std::abs(plain.value(i, j, k) - c.value(i, j, k))));
+    EXPECT_GT(moved, 0.1);
+}
+
 TEST(SmoothVolume, CancelStopsPromptlyAndThrowsCancelled) {
     Volume v = make_volume(48, 1.0, sphere_sdf(Vec3d(24, 24, 24), 14.0));
     StopAfter p(3);

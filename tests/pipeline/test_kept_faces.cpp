@@ -264,6 +264,56 @@ TEST(KeptFaces, TheEngineRunsOnlyWhereItsSurfaceIsUsed) {
     EXPECT_TRUE(smooth_mesh(open, o).report.smoothed);
 }
 
+TEST(KeptFaces, AClosedInputKeptOnItsOwnFacesStopsTheEngineAfterItsFirstIteration) {
+    // The engine's volume serves a closed input kept on its own faces only as the guard's reference, and auto only for
+    // the keep-or-re-mesh decision: both read the first iteration's surface, and the engine goes on only where the
+    // result is re-meshed. A re-meshed result is bit for bit the one decided after the whole run.
+    const Mesh sphere = test::icosphere(1.0, 3);
+    const auto noisy_sphere = [&](double sigma) {
+        Mesh m = sphere;
+        NoiseOptions n;
+        n.sigma = sigma;
+        add_noise(m, n);
+        return m;
+    };
+    const Mesh noisy = noisy_sphere(0.3), heavy = noisy_sphere(1.5);
+    PipelineOptions o = kept();
+    o.scan.resolution = 64;
+    const int all = 3;  // given: no stop when the normal map is smooth, which this small sphere reaches at once
+    o.smooth.iterations = all;
+    const PipelineResult keep = smooth_mesh(noisy, o);
+    EXPECT_TRUE(keep.report.smoothed);
+    EXPECT_EQ(keep.report.smooth.iterations_run(), 1);
+    EXPECT_TRUE(keep.report.smooth.stopped_at_checkpoint);
+    EXPECT_FALSE(keep.report.fitted);  // nothing to decide
+    // auto keeps it after the first iteration's fit, with keep's result
+    o.connectivity = Connectivity::Auto;
+    const PipelineResult automatic = smooth_mesh(noisy, o);
+    ASSERT_TRUE(automatic.report.connectivity_kept);
+    EXPECT_TRUE(automatic.report.fitted);
+    EXPECT_LT(automatic.report.fit.mean_face_angle_deg, kAutoKeepFitAngleDeg);
+    EXPECT_EQ(automatic.report.smooth.iterations_run(), 1);
+    EXPECT_EQ(automatic.mesh.positions, keep.mesh.positions);
+    // heavy noise: re-meshed after the whole run, the same as auto with the fit's filter, which decides after it
+    const PipelineResult remeshed = smooth_mesh(heavy, o);
+    ASSERT_FALSE(remeshed.report.connectivity_kept);
+    EXPECT_GE(remeshed.report.fit.mean_face_angle_deg, kAutoKeepFitAngleDeg);
+    EXPECT_EQ(remeshed.report.smooth.iterations_run(), all);
+    EXPECT_FALSE(remeshed.report.smooth.stopped_at_checkpoint);
+    PipelineOptions fit = o;
+    fit.keep_filter = KeepFilter::Volume;
+    const PipelineResult decided_after = smooth_mesh(heavy, fit);
+    ASSERT_FALSE(decided_after.report.connectivity_kept);
+    EXPECT_EQ(decided_after.mesh.positions, remeshed.mesh.positions);
+    EXPECT_EQ(decided_after.mesh.triangles, remeshed.mesh.triangles);
+    // where the result is the engine's surface or fitted to it, the whole run
+    o.connectivity = Connectivity::Remesh;
+    EXPECT_EQ(smooth_mesh(noisy, o).report.smooth.iterations_run(), all);
+    o.connectivity = Connectivity::Keep;
+    o.keep_filter = KeepFilter::Volume;
+    EXPECT_EQ(smooth_mesh(noisy, o).report.smooth.iterations_run(), all);
+}
+
 TEST(KeptFaces, AnOpenInputsGuardHasVoxelsOfTwiceItsNoise) {
     // Without the engine the volume is the guard's alone: at the automatic resolution, or coarser so that a voxel is
     // twice the noise (the gradient over two voxels then sees the surface, not the noise), but no coarser than the
