@@ -523,11 +523,6 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     }
     Volume v = mesh_to_volume(m, scan, &r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
-    // A closed input kept on its own faces reads the engine's volume only for the guard, and auto's keep or re-mesh
-    // only for the fit angle below: both read the surface of the engine's first iteration, and the engine goes on
-    // only for a surface that is re-meshed. On the study's closed pairs the first iteration's fit angle keeps and
-    // re-meshes the same pairs as the last one's (kept 1.40 to 2.31°, re-meshed 3.44 to 5.71°; docs/history/
-    // benchmarks-2026.md, "The keep decision after the first iteration").
     // The fit of the input to a smoothed surface: the kept result where the fit is (KeepFilter::Volume, Fit), and auto's
     // keep or re-mesh on a closed input: it is kept when its fitted faces agree with the volume's normals
     // (kAutoKeepFitAngleDeg), the noise having moved its vertices across the surface only, not along it.
@@ -537,6 +532,11 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         r.fitted = true;
         if (automatic && !open) keep = keep || r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
     };
+    // A closed input kept on its own faces reads the engine's volume only for the guard, and auto's keep or re-mesh
+    // only for the fit angle above: both read the surface of the engine's first iteration, and the engine goes on
+    // only for a surface that is re-meshed. On the study's closed pairs the first iteration's fit angle keeps and
+    // re-meshes the same pairs as the last one's (kept 1.40 to 2.31°, re-meshed 3.44 to 5.71°; docs/history/
+    // benchmarks-2026.md, "The keep decision after the first iteration").
     bool decided = false;
     double decision_seconds = 0;
     const SmoothCheckpoint go_on = [&](const Volume& surface) {

@@ -163,7 +163,7 @@ double sampled_max_distance(const Mesh& from, const Mesh& to, int samples_per_fa
     // points that may raise it are measured exactly. Every point's distance is then either measured or below a
     // measured one, so the maximum is exact, whatever the blocks and threads. A sparse pass first gives each block a
     // bound to start from.
-    constexpr std::size_t kStride = 64;
+    constexpr std::size_t kStride = 64, kBlock = 1024;
     double seed = 0.0;
     {
         const std::size_t sparse = (pts.size() + kStride - 1) / kStride;
@@ -173,13 +173,13 @@ double sampled_max_distance(const Mesh& from, const Mesh& to, int samples_per_fa
         });
         for (double x : d) seed = std::max(seed, x);
     }
-    const std::size_t blocks = (pts.size() + 1023) / 1024;
+    const std::size_t blocks = (pts.size() + kBlock - 1) / kBlock;
     std::vector<double> block_max(blocks, seed);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& r) {
         for (std::size_t b = r.begin(); b < r.end(); ++b) {
             double mx = seed;
             std::uint32_t hint = ClosestHit::kNone;
-            for (std::size_t i = b * 1024; i < std::min(pts.size(), (b + 1) * 1024); ++i) {
+            for (std::size_t i = b * kBlock; i < std::min(pts.size(), (b + 1) * kBlock); ++i) {
                 // a triangle strictly closer than the bound: the point cannot raise it
                 const ClosestHit near = query->closest_within(pts[i], mx, hint);
                 if (near.found()) {
