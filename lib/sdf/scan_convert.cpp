@@ -200,10 +200,9 @@ BlockStats process_block(const Context& c, const std::array<int, 3>& b, float* o
 
 }  // namespace
 
-Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConvertOptions& opt,
-                    ScanConvertReport* report, Progress* progress) {
-    if (m.empty()) throw InvalidInput("scan_convert: empty mesh (no triangles)");
-    check_mesh(m, "scan_convert");
+namespace {
+
+void check_scan_options(const ScanConvertOptions& opt) {
     if (!(opt.half_width >= 1.0f) || !std::isfinite(opt.half_width))
         throw InvalidInput("scan_convert: half_width is " + std::to_string(opt.half_width) + " voxels, expected >= 1");
     if (!(opt.shell_thickness >= 0) || !std::isfinite(opt.shell_thickness))
@@ -215,48 +214,35 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
         throw InvalidInput("scan_convert: resolution is " + std::to_string(opt.resolution) + ", expected >= 1");
     if (opt.threads < 0)
         throw InvalidInput("scan_convert: threads is " + std::to_string(opt.threads) + ", expected >= 0");
-    detail::begin(progress, "voxelize");
+}
 
-    Box3d box;
-    for (const Tri& t : m.triangles)
-        for (int c = 0; c < 3; ++c) box.extend(Vec3d(m.positions[t[c]]));
-    const Vec3d size = box.size();
-    const double h = opt.voxel_size > 0 ? opt.voxel_size : box.longest_side() / opt.resolution;
-    if (!(h > 0))
-        throw InvalidInput("scan_convert: the mesh has zero extent; set voxel_size to choose the grid spacing");
+// The scan of the blocks [w.lo, w.hi) of `grid` into a volume over that window (whole = the whole grid: the tile
+// scan starts outside at its border and a volume with nothing inside is refused). Sample positions come from `grid`
+// itself, so a window's values are bit for bit those of the whole grid's scan.
+Volume scan_window(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn, const Grid& grid,
+                   const BlockWindow& w, bool whole, const ScanConvertOptions& opt, ScanConvertReport& rep,
+                   Progress* progress) {
+    const double h = grid.voxel_size;
     const double hw = opt.half_width;
     const double shell_off = opt.shell_thickness * 0.5;
-    const int pad = int(std::ceil(hw + 2.0 + shell_off / h));
-    Grid grid;
-    grid.voxel_size = h;
-    grid.origin = box.min - Vec3d(pad, pad, pad) * h;
-    double blocks_total = 1;
+    Grid sub = grid;
     for (int a = 0; a < 3; ++a) {
-        const double n = std::ceil(size[a] / h) + 1 + 2.0 * pad;
-        if (n > 1 << 28)
-            throw OutOfMemory("scan_convert: grid would have " + std::to_string(n) + " samples along an axis");
-        grid.dims[a] = int(n);
-        blocks_total *= std::ceil(n / kBlockDim);
+        sub.origin[a] = grid.origin[a] + double(w.lo[a] * kBlockDim) * h;
+        sub.dims[a] = std::min(w.hi[a] * kBlockDim, grid.dims[a]) - w.lo[a] * kBlockDim;
     }
-    if (blocks_total > double(1u << 31))
-        throw OutOfMemory("scan_convert: the block table would have " + std::to_string(blocks_total) +
-                          " entries (over 2^31); use a coarser resolution");
-    Volume vol(grid, opt.half_width);
+    Volume vol(sub, opt.half_width);
     const double bg = vol.background;
     const double reach = hw * h + shell_off;
-    ScanConvertReport rep;
-    rep.grid = grid;
+    rep.grid = sub;
     tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
-
-    // Sign oracle (built up front; its time goes to seconds_sign).
-    const auto t_sign0 = Clock::now();
-    std::unique_ptr<WindingNumber> wn;
-    if (opt.shell_thickness == 0) arena.execute([&] { wn = std::make_unique<WindingNumber>(m); });
-    rep.seconds_sign += seconds_since(t_sign0);
+    const auto& bd = vol.block_dims;
+    // Global block (bi, bj, bk) of the grid is the window's (bi − lo, ...).
+    auto global_block = [&](int bi, int bj, int bk) {
+        return std::array<int, 3>{bi + w.lo[0], bj + w.lo[1], bk + w.lo[2]};
+    };
 
     // 1. Candidate blocks: those a triangle's box dilated by the band touches, near its plane.
     const auto t_dist0 = Clock::now();
-    const auto& bd = vol.block_dims;
     std::vector<std::uint8_t> cand(vol.block_table.size(), 0);
     const double halfdiag = 3.5 * std::sqrt(3.0) * h;
     arena.execute([&] {
@@ -267,10 +253,15 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
                 const Vec3d lo = grid.index(cwise_min(a, cwise_min(b, c)) - Vec3d(reach, reach, reach));
                 const Vec3d hi = grid.index(cwise_max(a, cwise_max(b, c)) + Vec3d(reach, reach, reach));
                 int blo[3], bhi[3];
+                bool outside = false;
                 for (int ax = 0; ax < 3; ++ax) {
                     blo[ax] = std::clamp(int(std::floor(lo[ax])), 0, grid.dims[ax] - 1) >> kBlockLog2;
                     bhi[ax] = std::clamp(int(std::ceil(hi[ax])), 0, grid.dims[ax] - 1) >> kBlockLog2;
+                    blo[ax] = std::max(blo[ax], w.lo[ax]);
+                    bhi[ax] = std::min(bhi[ax], w.lo[ax] + bd[ax] - 1);
+                    outside |= blo[ax] > bhi[ax];
                 }
+                if (outside) continue;
                 const Vec3d nrm = normalized(cross(b - a, c - a));
                 const bool plane = squared_norm(nrm) > 0.5;
                 for (int bk = blo[2]; bk <= bhi[2]; ++bk)
@@ -280,7 +271,8 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
                                 const Vec3d cen = grid.world(Vec3d(bi * 8 + 3.5, bj * 8 + 3.5, bk * 8 + 3.5));
                                 if (std::abs(dot(cen - a, nrm)) > reach + halfdiag) continue;
                             }
-                            std::atomic_ref<std::uint8_t>(cand[vol.table_index(bi, bj, bk)])
+                            std::atomic_ref<std::uint8_t>(
+                                cand[vol.table_index(bi - w.lo[0], bj - w.lo[1], bk - w.lo[2])])
                                 .store(1, std::memory_order_relaxed);
                         }
             }
@@ -290,12 +282,12 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
     for (int bk = 0; bk < bd[2]; ++bk)
         for (int bj = 0; bj < bd[1]; ++bj)
             for (int bi = 0; bi < bd[0]; ++bi)
-                if (cand[vol.table_index(bi, bj, bk)]) cands.push_back({bi, bj, bk});
+                if (cand[vol.table_index(bi, bj, bk)]) cands.push_back(global_block(bi, bj, bk));
     cand = {};
     rep.candidate_blocks = cands.size();
 
     // 2. Distances and signs per candidate block, in chunks (bounded scratch memory).
-    const Context ctx{grid, q, wn.get(), h, reach, shell_off, bg};
+    const Context ctx{grid, q, wn, h, reach, shell_off, bg};
     constexpr std::size_t kChunk = 512;  // also the cancel granularity: ~0.1 s of work per chunk
     std::vector<float> scratch;
     std::vector<BlockStats> stats;
@@ -318,26 +310,35 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
             any_inside |= s.inside;
             rep.band_voxels += s.band;
             const auto& b = cands[i];
-            const std::int32_t slot = vol.allocate_block(b[0], b[1], b[2]);
+            const std::int32_t slot = vol.allocate_block(b[0] - w.lo[0], b[1] - w.lo[1], b[2] - w.lo[2]);
             std::copy_n(scratch.data() + (i - c0) * kBlockVoxels, kBlockVoxels, vol.block_values(slot));
         }
         detail::tick(progress, double(c1) / double(cands.size()), "scan_convert");
     }
     scratch = {};
-    rep.seconds_distance = seconds_since(t_dist0);
-    if (wn && !any_inside)
+    rep.seconds_distance += seconds_since(t_dist0);
+    if (whole && wn && !any_inside)
         throw InvalidInput(
             "scan_convert: the mesh encloses no volume (winding number > 1/2 nowhere near it: an "
             "open sheet, or oriented inside-out); use --shell T (shell_thickness) to treat it as a "
             "thin shell");
 
-    // 3. Tile signs of unallocated blocks: scan each block row along x, starting outside.
+    // 3. Tile signs of unallocated blocks: scan each block row along x, starting outside (the whole grid's border
+    // is outside; a window's row starts with the winding number at the centre of its first block, which lies
+    // beyond the band when unallocated).
     const auto t_tile0 = Clock::now();
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, bd[1] * bd[2], 16), [&](const auto& range) {
             for (int row = range.begin(); row != range.end(); ++row) {
                 const int bj = row % bd[1], bk = row / bd[1];
                 std::int32_t tile = kBlockOutside;
+                if (w.lo[0] > 0 && vol.block_table[vol.table_index(0, bj, bk)] < 0) {
+                    if (wn) {
+                        const auto g = global_block(0, bj, bk);
+                        const Vec3d cen = grid.world(Vec3d(g[0] * 8 + 3.5, g[1] * 8 + 3.5, g[2] * 8 + 3.5));
+                        if ((*wn)(cen) > 0.5) tile = kBlockInside;
+                    }
+                }
                 for (int bi = 0; bi < bd[0]; ++bi) {
                     std::int32_t& slot = vol.block_table[vol.table_index(bi, bj, bk)];
                     if (slot < 0) {
@@ -345,12 +346,12 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
                         continue;
                     }
                     // Sign of the largest |phi| on the block's last in-grid x-layer.
-                    const int li = std::min(kBlockDim - 1, grid.dims[0] - 1 - bi * kBlockDim);
+                    const int li = std::min(kBlockDim - 1, sub.dims[0] - 1 - bi * kBlockDim);
                     const float* vals = vol.block_values(slot);
                     float best = 0;
                     for (int lk = 0; lk < kBlockDim; ++lk)
                         for (int lj = 0; lj < kBlockDim; ++lj) {
-                            if (!grid.contains(bi * 8 + li, bj * 8 + lj, bk * 8 + lk)) continue;
+                            if (!sub.contains(bi * 8 + li, bj * 8 + lj, bk * 8 + lk)) continue;
                             const float v = vals[Volume::local_index(li, lj, lk)];
                             if (std::abs(v) > std::abs(best)) best = v;
                         }
@@ -364,8 +365,14 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
     // tile may touch the grid border. On a closed mesh this always holds; near the holes of an open
     // mesh the row scan can disagree between rows, or an inside region can run out to the border.
     // Allocate every inside tile that touches an outside tile (filled with -background): the level
-    // set then closes between them. Marked in parallel, allocated in block order (deterministic).
+    // set then closes between them. Marked in parallel, allocated in block order (deterministic). A window's
+    // side inside the grid is no border: what lies beyond it is another window's to check.
     std::vector<std::uint8_t> conflict(vol.block_table.size(), 0);
+    const auto& gbd = [&] {
+        std::array<int, 3> d{};
+        for (int a = 0; a < 3; ++a) d[a] = (grid.dims[a] + kBlockDim - 1) / kBlockDim;
+        return d;
+    }();
     arena.execute([&] {
         tbb::parallel_for(tbb::blocked_range<int>(0, bd[1] * bd[2], 16), [&](const auto& range) {
             for (int row = range.begin(); row != range.end(); ++row) {
@@ -377,9 +384,14 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
                         for (int dj = -1; dj <= 1 && !hit; ++dj)
                             for (int di = -1; di <= 1 && !hit; ++di) {
                                 const int ni = bi + di, nj = bj + dj, nk = bk + dk;
-                                // Beyond the grid counts as outside (extract_surface reads +background there).
-                                hit = ni < 0 || nj < 0 || nk < 0 || ni >= bd[0] || nj >= bd[1] || nk >= bd[2] ||
-                                      vol.block_table[vol.table_index(ni, nj, nk)] == kBlockOutside;
+                                if (ni < 0 || nj < 0 || nk < 0 || ni >= bd[0] || nj >= bd[1] || nk >= bd[2]) {
+                                    // Beyond the grid counts as outside (extract_surface reads +background there).
+                                    const auto g = global_block(ni, nj, nk);
+                                    hit = g[0] < 0 || g[1] < 0 || g[2] < 0 || g[0] >= gbd[0] || g[1] >= gbd[1] ||
+                                          g[2] >= gbd[2];
+                                } else {
+                                    hit = vol.block_table[vol.table_index(ni, nj, nk)] == kBlockOutside;
+                                }
                             }
                     conflict[vol.table_index(bi, bj, bk)] = hit;
                 }
@@ -409,6 +421,79 @@ Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConv
             "scan_convert: the mesh is open (holes or boundaries): the volume is closed across them (" + detail + ")";
         rep.warnings.push_back(rep.open_mesh_warning);
     }
+    return vol;
+}
+
+}  // namespace
+
+Grid scan_grid(const Mesh& m, const ScanConvertOptions& opt) {
+    if (m.empty()) throw InvalidInput("scan_convert: empty mesh (no triangles)");
+    check_scan_options(opt);
+    Box3d box;
+    for (const Tri& t : m.triangles)
+        for (int c = 0; c < 3; ++c) box.extend(Vec3d(m.positions[t[c]]));
+    const Vec3d size = box.size();
+    const double h = opt.voxel_size > 0 ? opt.voxel_size : box.longest_side() / opt.resolution;
+    if (!(h > 0))
+        throw InvalidInput("scan_convert: the mesh has zero extent; set voxel_size to choose the grid spacing");
+    const double hw = opt.half_width;
+    const double shell_off = opt.shell_thickness * 0.5;
+    const int pad = int(std::ceil(hw + 2.0 + shell_off / h));
+    Grid grid;
+    grid.voxel_size = h;
+    grid.origin = box.min - Vec3d(pad, pad, pad) * h;
+    double blocks_total = 1;
+    for (int a = 0; a < 3; ++a) {
+        const double n = std::ceil(size[a] / h) + 1 + 2.0 * pad;
+        if (n > 1 << 28)
+            throw OutOfMemory("scan_convert: grid would have " + std::to_string(n) + " samples along an axis");
+        grid.dims[a] = int(n);
+        blocks_total *= std::ceil(n / kBlockDim);
+    }
+    if (blocks_total > double(1u << 31))
+        throw OutOfMemory("scan_convert: the block table would have " + std::to_string(blocks_total) +
+                          " entries (over 2^31); use a coarser resolution");
+    return grid;
+}
+
+Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConvertOptions& opt,
+                    ScanConvertReport* report, Progress* progress) {
+    if (m.empty()) throw InvalidInput("scan_convert: empty mesh (no triangles)");
+    check_mesh(m, "scan_convert");
+    check_scan_options(opt);
+    detail::begin(progress, "voxelize");
+    const Grid grid = scan_grid(m, opt);
+    ScanConvertReport rep;
+    // Sign oracle (built up front; its time goes to seconds_sign).
+    const auto t_sign0 = Clock::now();
+    std::unique_ptr<WindingNumber> wn;
+    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
+    if (opt.shell_thickness == 0) arena.execute([&] { wn = std::make_unique<WindingNumber>(m); });
+    rep.seconds_sign += seconds_since(t_sign0);
+    BlockWindow all;
+    for (int a = 0; a < 3; ++a) all.hi[a] = (grid.dims[a] + kBlockDim - 1) / kBlockDim;
+    Volume vol = scan_window(m, q, wn.get(), grid, all, true, opt, rep, progress);
+    if (report) *report = std::move(rep);
+    return vol;
+}
+
+Volume scan_convert_window(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn, const Grid& grid,
+                           const BlockWindow& window, const ScanConvertOptions& opt, ScanConvertReport* report,
+                           Progress* progress) {
+    if (m.empty()) throw InvalidInput("scan_convert: empty mesh (no triangles)");
+    check_scan_options(opt);
+    if (!wn && opt.shell_thickness == 0)
+        throw InvalidInput("scan_convert_window: a winding number is needed unless shell_thickness > 0");
+    std::array<int, 3> gbd{};
+    for (int a = 0; a < 3; ++a) {
+        gbd[a] = (grid.dims[a] + kBlockDim - 1) / kBlockDim;
+        if (window.lo[a] < 0 || window.hi[a] > gbd[a] || window.lo[a] >= window.hi[a])
+            throw InvalidInput("scan_convert_window: the window's blocks along axis " + std::to_string(a) + " are [" +
+                               std::to_string(window.lo[a]) + ", " + std::to_string(window.hi[a]) +
+                               "), expected a non-empty range within [0, " + std::to_string(gbd[a]) + ")");
+    }
+    ScanConvertReport rep;
+    Volume vol = scan_window(m, q, wn, grid, window, false, opt, rep, progress);
     if (report) *report = std::move(rep);
     return vol;
 }

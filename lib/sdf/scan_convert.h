@@ -2,6 +2,7 @@
 /// \file scan_convert.h
 /// Scan conversion: any triangle mesh to a sparse narrow-band signed distance Volume.
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -76,5 +77,34 @@ struct ScanConvertReport {
 /// Threading: TBB parallel_for over blocks (opt.threads); the result is identical for any count.
 Volume scan_convert(const Mesh& m, const ClosestTriangleQuery& q, const ScanConvertOptions& opt = {},
                     ScanConvertReport* report = nullptr, Progress* progress = nullptr);
+
+/// The grid scan_convert samples m on: the bounding box of the referenced vertices with h = voxel_size or longest
+/// side / resolution, padded as scan_convert says.
+/// \throw InvalidInput for an empty mesh, bad options or a mesh of zero extent; OutOfMemory for a block table over
+///        2^31 entries.
+Grid scan_grid(const Mesh& m, const ScanConvertOptions& opt = {});
+
+/// A box of 8³ blocks of a grid: blocks lo ≤ (bi, bj, bk) < hi along each axis.
+struct BlockWindow {
+    std::array<int, 3> lo{0, 0, 0};
+    std::array<int, 3> hi{0, 0, 0};
+};
+
+class WindingNumber;
+
+/// scan_convert restricted to the blocks of a window of `grid` (scan_grid(m, opt)), for work done brick by brick:
+/// the returned volume's grid is the window's (origin at its first sample, dims clipped to the grid's), its block
+/// (bi, bj, bk) the grid's (bi + lo, ...). On a closed mesh its values are bit for bit those of scan_convert(m, q,
+/// opt) in the same blocks, its tiles the same signs: samples are placed by `grid` itself, and a row of tiles that
+/// starts inside the grid starts with the sign of wn at its first block's centre. A window holding no surface is
+/// all tiles. Near the holes of an open mesh tiles follow each window's own rows, so two windows may disagree
+/// where scan_convert would allocate a conflict block; only the grid's own border counts as a border.
+/// \param wn the winding number of m (built once for all windows); may be null only with shell_thickness > 0.
+/// The mesh is not checked (check it once, as scan_convert does). Memory and time grow with the surface inside the
+/// window, plus one pass over the triangles.
+/// \throw InvalidInput for bad options or a window not within the grid's blocks.
+Volume scan_convert_window(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn, const Grid& grid,
+                           const BlockWindow& window, const ScanConvertOptions& opt = {},
+                           ScanConvertReport* report = nullptr, Progress* progress = nullptr);
 
 }  // namespace normalflow

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "core/errors.h"
+#include "sdf/winding_number.h"
 #include "sdf_test_meshes.h"
 
 namespace normalflow {
@@ -113,6 +114,57 @@ TEST(ScanConvert, IdenticalForOneAndTwoThreads) {
     EXPECT_EQ(a.values, b.values);
     EXPECT_EQ(r1.band_voxels, r2.band_voxels);
     EXPECT_EQ(r1.uncertain_sign, r2.uncertain_sign);
+}
+
+// Every window of a partition of the grid into bricks, scanned alone, holds what the whole scan holds in its blocks:
+// the same values bit for bit where a block is allocated in either, the same tile sign elsewhere (a hollow ball,
+// whose cavity and shell rows start inside some windows, a torus and a box).
+TEST(ScanConvert, AWindowHoldsWhatTheWholeScanHoldsInItsBlocks) {
+    Mesh m = test::concat(test::icosphere(1.0, 3), test::flipped(test::icosphere(0.5, 3)));
+    Mesh torus = test::torus_mesh(0.6, 0.2, 32, 16);
+    for (auto& p : torus.positions) p += Vec3f(0.3f, 0.2f, 1.5f);
+    m = test::concat(m, torus);
+    m = test::concat(m, test::box_mesh({1.2, -0.6, -0.6}, {2.4, 0.6, 0.6}));
+    const auto q = make_bvh_query(m);
+    const ScanConvertOptions o = at(96, 3.0f, 2);
+    const Volume whole = scan_convert(m, *q, o);
+    const Grid grid = scan_grid(m, o);
+    ASSERT_EQ(grid.dims, whole.grid.dims);
+    const WindingNumber wn(m);
+    constexpr int kBrick = 3;  // blocks per window side: many windows start inside the ball or the box
+    std::size_t windows = 0, samples = 0, differing = 0, inside_starts = 0;
+    for (int bk = 0; bk < whole.block_dims[2]; bk += kBrick)
+        for (int bj = 0; bj < whole.block_dims[1]; bj += kBrick)
+            for (int bi = 0; bi < whole.block_dims[0]; bi += kBrick) {
+                BlockWindow w;
+                w.lo = {bi, bj, bk};
+                for (int a = 0; a < 3; ++a) w.hi[a] = std::min(w.lo[a] + kBrick, whole.block_dims[a]);
+                const Volume part = scan_convert_window(m, *q, &wn, grid, w, o);
+                ++windows;
+                for (int a = 0; a < 3; ++a) ASSERT_EQ(part.block_dims[a], w.hi[a] - w.lo[a]);
+                if (w.lo[0] > 0) {
+                    // Rows whose first block is an inside tile.
+                    for (int rk = w.lo[2]; rk < w.hi[2]; ++rk)
+                        for (int rj = w.lo[1]; rj < w.hi[1]; ++rj)
+                            inside_starts += whole.block_table[whole.table_index(w.lo[0], rj, rk)] == kBlockInside;
+                }
+                for (int k = 0; k < part.grid.dims[2]; ++k)
+                    for (int j = 0; j < part.grid.dims[1]; ++j)
+                        for (int i = 0; i < part.grid.dims[0]; ++i) {
+                            const float a = part.value(i, j, k);
+                            const float b = whole.value(i + w.lo[0] * 8, j + w.lo[1] * 8, k + w.lo[2] * 8);
+                            ++samples;
+                            differing += a != b;
+                        }
+            }
+    EXPECT_GT(windows, 50u);
+    EXPECT_GT(inside_starts, 0u);  // the case the row's first winding number is there for
+    EXPECT_EQ(samples, whole.grid.sample_count());
+    EXPECT_EQ(differing, 0u);
+    // A window outside the grid's blocks is refused.
+    BlockWindow bad;
+    bad.hi = {whole.block_dims[0] + 1, 1, 1};
+    EXPECT_THROW(scan_convert_window(m, *q, &wn, grid, bad, o), InvalidInput);
 }
 
 TEST(ScanConvert, MemoryGrowsWithTheSurfaceNotTheVolume) {
