@@ -66,7 +66,7 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
     band.update_band();
     // out to the full half width, not just working_limit(): a run that stops in its first
     // iteration (below) then returns this φ as it is
-    band.reinitialise(kHalfWidth, ctl);
+    if (opt.reinitialise_input) band.reinitialise(kHalfWidth, ctl);
     rep.seconds_reinit += seconds_since(t_band);
     for (int it = 0; it < opt.iterations; ++it) {
         const auto t_it = Clock::now();
@@ -81,9 +81,17 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
             rep.seconds_normals += seconds_since(t0);
             const auto t1 = Clock::now();
             const bool keep = filter->preserves_volume(opt);
-            const double volume = keep ? active_volume(band) : 0.0;
+            const bool deferred = keep && opt.defer_volume_shift;
+            double volume = 0.0;
+            if (deferred)
+                window_volume(band, opt.volume_lo, opt.volume_hi, record.volume_before, record.volume_slope);
+            else if (keep)
+                volume = active_volume(band);
             refit_to_normals(c, filter->refit_rules());
-            if (keep && record.refit_steps > 0) record.volume_shift = restore_volume(band, volume);
+            if (deferred)
+                window_volume(band, opt.volume_lo, opt.volume_hi, record.volume_after, record.volume_slope);
+            else if (keep && record.refit_steps > 0)
+                record.volume_shift = restore_volume(band, volume);
             if (normal_map)  // this iteration's N, the last one's in the end (the band moves next)
                 for (std::size_t a = 0; a < 3; ++a)
                     band.write_field(band.work().normals[a], kNoNormal, (*normal_map)[a]);
@@ -106,7 +114,7 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
         const bool smooth_enough = auto_stop && record.roughness < kNeighbourhoodRoughness;
         const bool more = it + 1 < opt.iterations && !unchanged && !smooth_enough;
         const auto t2 = Clock::now();
-        if (!(unchanged && band.reinit_limit() >= kHalfWidth)) {
+        if (!(unchanged && band.reinit_limit() >= kHalfWidth) && (more || opt.final_reinitialise)) {
             band.update_band();
             band.reinitialise(more ? working_limit(opt) : kHalfWidth, ctl);
         }
@@ -194,6 +202,24 @@ int default_refit_steps(const SmoothOptions& opt) {
 int default_normal_steps(SmoothMode mode) {
     const auto filter = engine::make_normal_filter(mode);
     return filter ? filter->default_normal_steps() : engine::kDiffusionSteps;
+}
+
+void reinitialise_volume(Volume& v, int threads) {
+    v.check("reinitialise_volume");
+    auto work = [&] {
+        engine::Band band(v);
+        if (!band.has_surface()) return;
+        engine::RunControl ctl(nullptr, 1);
+        band.update_band();
+        band.reinitialise(engine::kHalfWidth, ctl);
+        band.write_back(v);
+    };
+    if (threads > 0) {
+        tbb::task_arena arena(threads);
+        arena.execute(work);
+    } else {
+        work();
+    }
 }
 
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* progress, NormalMap* normal_map,

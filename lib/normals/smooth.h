@@ -5,6 +5,7 @@
 /// Surface Processing via Normal Maps", ACM TOG 22(4), 2003), plus mean curvature flow as the
 /// second-order baseline.
 
+#include <array>
 #include <cstddef>
 #include <functional>
 #include <string>
@@ -101,6 +102,26 @@ struct SmoothOptions {
         ///< patient stop decided, once per super step. A super step that runs away (a non-finite
         ///< stage, D doubled) or a first one that already raises D is undone, and the rest of the
         ///< refit time starts again in super steps from there (up to twice), then in explicit steps. 0: the explicit steps of refit_dt (the default before version 0.2).
+    bool refit_whole_time = false;  ///< Bilateral, Guided, TotalVariation with refit_super_steps > 0: keep every super
+        ///< step that stays finite and below twice the lowest D (no patient stop, no undoing a last one that
+        ///< raised D). For work done brick by brick (smooth_in_bricks), where D is a window's, not the whole
+        ///< surface's, and a window's border alone can raise it; the whole run keeps every super step wherever D
+        ///< falls to the end, as it does on every iteration of the study's pairs.
+    /// For work done brick by brick (smooth_in_bricks): with preserve_volume, measure the volume before and after
+    /// each refit over the blocks volume_lo <= (bi, bj, bk) < volume_hi only (SmoothIteration::volume_before, ...)
+    /// and leave the shift that restores it to the caller, who sums the bricks' measures.
+    bool defer_volume_shift = false;
+    std::array<int, 3> volume_lo{0, 0, 0};
+    std::array<int, 3> volume_hi{0, 0, 0};
+    /// false: the volume is what smooth_volume returned (its band and φ a signed distance out to the half width, as
+    /// a run leaves them), and the first iteration reads it as it is instead of reinitialising it first. A run in
+    /// steps (smooth_in_bricks, one iteration at a time) then reads φ as the one run would have.
+    bool reinitialise_input = true;
+    /// false: the last iteration leaves φ as its refit (and volume constraint) left it, the band where that
+    /// iteration had it, not reinitialised: for a run in steps whose caller changes φ before the next step
+    /// (smooth_in_bricks' volume constraint over the whole surface) and reinitialises it then
+    /// (reinitialise_volume), as the one run would have.
+    bool final_reinitialise = true;
     double refit_tolerance = 1e-4;         ///< >= 0: the refit stops when D decreases by less than this
                                            ///< fraction of itself in one step (0: until D stops decreasing).
                                            ///< The surface-sample filters: when D has not reached a new low by this
@@ -164,6 +185,10 @@ inline constexpr int kNeighbourhoodPasses = 10;
 inline constexpr int kTotalVariationSteps = 100;
 inline constexpr float kNeighbourhoodRefitTime = 1.4f;
 
+/// The surface-sample filters (Bilateral, Guided) take every s-th shell sample along each axis of the grid, s this
+/// at most (SmoothOptions::thin_samples; 1 for the other modes): a window of a grid whose first sample lies on a
+/// multiple of it along each axis thins its samples as the whole grid does.
+int surface_sample_stride(const SmoothOptions& opt);
 /// The refit steps per main iteration for SmoothOptions::refit_max_steps = 0 (see there).
 int default_refit_steps(const SmoothOptions& opt);
 
@@ -187,6 +212,10 @@ struct SmoothIteration {
     float mu = 0;                       ///< Anisotropic: the conductance scale µ used (1/voxel); 0 for
                                         ///< the other modes
     float volume_shift = 0;             ///< voxels: the shift preserve_volume applied (positive: outwards)
+    /// defer_volume_shift: the volume (voxels³) inside the surface over volume_lo … volume_hi before and after the
+    /// refit, and its slope against a uniform shift of φ (voxels²): the shift that restores it is
+    /// (volume_after − volume_before) / volume_slope outwards.
+    double volume_before = 0, volume_after = 0, volume_slope = 0;
     float roughness = 0;          ///< Bilateral, Guided, TotalVariation: what the filter left, the 75th percentile of
                                   ///< |N_i − M_i| over the surface samples, M_i the plain Gaussian mean
                                   ///< of the filtered normals over i's disc (0 for the other modes)
@@ -279,6 +308,11 @@ using SmoothCheckpoint = std::function<bool(const Volume&)>;
 /// fixed order, so the result is bit-identical for any thread count.
 SmoothReport smooth_volume(Volume& v, const SmoothOptions& opt = {}, Progress* progress = nullptr,
                            NormalMap* normal_map = nullptr, const SmoothCheckpoint* checkpoint = nullptr);
+
+/// Moves the narrow band of v to its surface and reinitialises φ to a signed distance out to the half width
+/// (engine::kHalfWidth), as smooth_volume does at the start and the end of a run. A volume without a surface is
+/// left as it is. threads: 0 all, else that many; the result does not depend on it.
+void reinitialise_volume(Volume& v, int threads = 0);
 
 /// Checks every field of opt as smooth_volume does before any work; a caller that does other work first (the
 /// pipeline's scan conversion) checks them up front with it.

@@ -314,7 +314,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         } else {
             since_best += tau_prev;
         }
-        if (step > 0 && since_best >= patience_time) {
+        if (step > 0 && since_best >= patience_time && !c.opt.refit_whole_time) {
             undo_last();
             d_end = prev;
             stopped = true;
@@ -351,7 +351,8 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         if (kept > 0 && d_end > 2.0 * best) {  // the last super step ran away: undo it
             undo_last();
             runaway = true;
-        } else if (kept > 0 && !(d_end <= prev)) {  // it raised D: undo it, as the explicit refit does
+        } else if (kept > 0 && !(d_end <= prev) && !c.opt.refit_whole_time) {  // it raised D: undo it, as the
+                                                                               // explicit refit does
             undo_last();
             d_end = prev;
         }

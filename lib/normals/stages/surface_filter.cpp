@@ -138,6 +138,17 @@ int SurfaceSampleFilter::stride(const SmoothOptions& opt, float ell) const {
     return !opt.thin_samples ? 1 : std::max(1, int(std::floor(ell / kStrideLength)));
 }
 
+}  // namespace normalflow::engine
+
+namespace normalflow {
+int surface_sample_stride(const SmoothOptions& opt) {
+    if (!is_neighbourhood_filter(opt.mode) || !opt.thin_samples) return 1;
+    return std::max(1, int(std::floor(engine::length_scale(opt) / engine::kStrideLength)));
+}
+}  // namespace normalflow
+
+namespace normalflow::engine {
+
 std::vector<double> SurfaceSampleFilter::normal_energy(StageContext& c, double g_before) {
     WorkBuffers& w = c.band.work();
     return {g_before, loop_.step(c, w.normals, w.normals_next, FaceWeight::One, false)};

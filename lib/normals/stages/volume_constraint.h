@@ -3,6 +3,8 @@
 /// Keeping the enclosed volume through a refit: a uniform shift of φ, the level-set counterpart
 /// of the centroid and volume restoration mesh filters apply after their vertex update.
 
+#include <array>
+
 #include "normals/stages/stage.h"
 
 namespace normalflow::engine {
@@ -11,6 +13,12 @@ namespace normalflow::engine {
 /// (each sample a unit cell, the surface crossing it linearly). Only differences are meaningful:
 /// samples outside the active mask are not counted. Summed per block, then in block order.
 double active_volume(const Band& band);
+
+/// active_volume over the active samples of the blocks lo <= (bi, bj, bk) < hi (block coordinates of the band's
+/// grid) only, and the slope of that volume against a uniform shift of φ (the samples within half a voxel of the
+/// surface): a brick's share of the whole surface's (smooth_in_bricks).
+void window_volume(const Band& band, const std::array<int, 3>& lo, const std::array<int, 3>& hi, double& volume,
+                   double& slope);
 
 /// Shifts φ on every allocated sample by one constant so that active_volume(band) comes back to
 /// `target` (two Newton steps on the piecewise-linear volume; none when no sample is within half

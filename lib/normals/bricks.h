@@ -1,0 +1,74 @@
+#pragma once
+/// \file bricks.h
+/// The scan conversion and the engine brick by brick: a volume too large for the memory at hand is processed one
+/// window of its grid at a time, each window a brick's interior with a halo around it, and the interiors are put
+/// together into the one volume the whole run would have made. Every stage is local (the scan conversion reads the
+/// triangles near a sample, a filter pass its disc, the refit a bounded time, the band's move a few voxels), so a
+/// brick whose halo covers what its interior depends on holds, in its interior, what the whole run holds there.
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "core/mesh.h"
+#include "core/progress.h"
+#include "core/volume.h"
+#include "normals/smooth.h"
+#include "sdf/closest_triangle.h"
+#include "sdf/scan_convert.h"
+
+namespace normalflow {
+
+/// How smooth_in_bricks cuts the grid.
+struct BrickOptions {
+    int brick_voxels = 128;  ///< the side of a brick's interior, voxels, >= 8 (rounded up to whole 8³ blocks)
+    int halo_voxels = 0;     ///< the halo on each side, voxels (rounded up to whole blocks); 0: brick_halo_voxels
+};
+
+/// The halo smooth_in_bricks gives a brick by default: what one main iteration reaches, times the iterations, and
+/// the engine's band. A main iteration of the surface-sample filters reads its disc (2 sigma_spatial ℓ) twice (the
+/// filter, the extension) and refits for a time T = refit steps × refit_dt, a diffusion whose reach is taken as
+/// 3 √(2T) (its kernel is below 1% there); the diffusions' normal loop runs for normal_steps × normal_dt in the same
+/// way; the band is engine::kHalfWidth. opt's defaults must be resolved (length_scale in voxels, sigma_spatial > 0).
+int brick_halo_voxels(const SmoothOptions& opt, int iterations);
+
+/// What smooth_in_bricks did.
+struct BrickReport {
+    int brick_voxels = 0;                ///< the interior's side, voxels (whole blocks)
+    int halo_voxels = 0;                 ///< the halo, voxels (whole blocks)
+    std::array<int, 3> bricks{0, 0, 0};  ///< bricks along x, y, z
+    int bricks_run = 0;  ///< bricks whose engine ran (their interior near a surface), summed over the iterations
+    int passes = 0;                      ///< main iterations run over the bricks
+    std::size_t largest_window_blocks = 0;  ///< the most allocated blocks one brick's window held in the engine
+    double seconds_scan = 0;                ///< wall seconds of the windows' scan conversions
+    double seconds_smooth = 0;              ///< wall seconds of the engine over the bricks (reinitialisation too)
+    int total() const { return bricks[0] * bricks[1] * bricks[2]; }
+};
+
+/// scan_convert(m, q, scan) followed by smooth_volume(·, opt), brick by brick. The grid (scan_grid) is cut into
+/// bricks of bricks.brick_voxels (whole blocks, on multiples of the filters' sample stride); the run goes one main
+/// iteration at a time over all the bricks, each brick's window (its interior and halo) taken from the scan
+/// (scan_convert_window, bit for bit the whole scan there) or from the last iteration's result, and its interior
+/// copied into the next one. Between iterations the run does what the one run does, in the same order, on the
+/// whole surface: the volume constraint's shift (preserve_volume: the bricks' interiors' volume changes and slopes
+/// summed, SmoothOptions::defer_volume_shift), the filters' automatic stop (opt.iterations = 0: the roughness of
+/// the iteration, the bricks' own averaged with the weight of their filtered samples), the checkpoint, and then the
+/// band moved and φ reinitialised. Within an iteration each brick's refit keeps its whole time
+/// (SmoothOptions::refit_whole_time), as the whole run does wherever D falls to the end. The result has the grid
+/// and layout smooth_volume returns (a band of engine::kHalfWidth voxels). Memory: one window's engine at a time,
+/// plus two copies of the result's band (the last iteration's and the next).
+///
+/// Where the halo covers what an interior depends on (brick_halo_voxels) the result is the whole run's within
+/// rounding: tests/normals/test_bricks.cpp measures 0 on a noisy sphere and box, bricks a quarter of the grid.
+///
+/// \param wn m's winding number (null only with scan.shell_thickness > 0).
+/// \param smooth_report receives one record per iteration over the whole (sums over the bricks; the refit's
+///        steps and evaluations the most of any brick) and the stops decided.
+/// \param checkpoint asked after each iteration but the last with the volume reinitialised (SmoothCheckpoint).
+/// \throw InvalidInput for bad options; what scan_convert_window and smooth_volume throw; Cancelled via progress.
+Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn,
+                        const ScanConvertOptions& scan, const SmoothOptions& opt, const BrickOptions& bricks,
+                        BrickReport* report = nullptr, SmoothReport* smooth_report = nullptr,
+                        Progress* progress = nullptr, const SmoothCheckpoint* checkpoint = nullptr);
+
+}  // namespace normalflow
