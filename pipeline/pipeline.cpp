@@ -19,6 +19,7 @@
 #include "remesh/decimate.h"
 #include "sdf/closest_triangle.h"
 #include "sdf/memory_estimate.h"
+#include "sdf/winding_number.h"
 #ifdef NORMALFLOW_HAS_CGAL
 #include "io/cgal/aabb_distance.h"
 #include "io/cgal/repair.h"
@@ -142,44 +143,227 @@ int auto_resolution(const Mesh& mesh, const PipelineOptions& options) {
     return res;
 }
 
-Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, PipelineReport* report, Progress* progress) {
-    validate(options);
-    PipelineOptions o = options;
-    PipelineReport local;
-    PipelineReport& r = report ? *report : local;
-    Stopwatch clock;
-    const Mesh* mesh = &input;
+namespace {
+
+/// The input of the scan conversion: the repaired copy (where repair ran), the options with the resolution and the
+/// bricks resolved, the closest-triangle search.
+struct ScanInput {
     Mesh repaired;
+    const Mesh* mesh = nullptr;
+    PipelineOptions o;
+    std::unique_ptr<ClosestTriangleQuery> query;
+};
+
+/// Repair, resolution, memory check (and the bricks, where allowed: a run of the engine) and the search.
+ScanInput prepare_scan(const Mesh& input, const PipelineOptions& options, PipelineReport& r, Progress* progress,
+                       bool bricks_allowed) {
+    ScanInput in;
+    in.o = options;
+    PipelineOptions& o = in.o;
+    Stopwatch clock;
+    in.mesh = &input;
     if (o.repair) {
 #ifdef NORMALFLOW_HAS_CGAL
         detail::begin(progress, "repair");
-        repaired.positions = input.positions;  // scan conversion needs the geometry only
-        repaired.triangles = input.triangles;
-        r.repair = repair_mesh(repaired);
+        in.repaired.positions = input.positions;  // scan conversion needs the geometry only
+        in.repaired.triangles = input.triangles;
+        r.repair = repair_mesh(in.repaired);
         r.repaired = true;
-        mesh = &repaired;
+        in.mesh = &in.repaired;
         append(r.warnings, r.repair.warnings);
 #else
         r.warnings.push_back("repair skipped: this build has no CGAL (NORMALFLOW_WITH_CGAL=OFF)");
 #endif
     }
     r.seconds.repair = clock.lap();
-    if (o.scan.voxel_size == 0 && o.scan.resolution == 0) o.scan.resolution = auto_resolution(*mesh, o);
-    r.memory_estimate_bytes = check_memory(*mesh, o);
-    detail::begin(progress, "voxelize");
+    const Mesh& mesh = *in.mesh;
+    if (o.scan.voxel_size == 0 && o.scan.resolution == 0) o.scan.resolution = auto_resolution(mesh, o);
     r.scan_options = effective_scan_options(o);
+    if (!bricks_allowed) {
+        o.brick_voxels = 0;
+        r.memory_estimate_bytes = check_memory(mesh, o);
+    } else if (!mesh.triangles.empty()) {
+        const double h =
+            o.scan.voxel_size > 0 ? o.scan.voxel_size : bounding_box(mesh).longest_side() / o.scan.resolution;
+        const SmoothOptions so = engine_options(o, h, model_length_scale(mesh), 0.0);
+        const int halo = o.brick_halo_voxels > 0 ? o.brick_halo_voxels : brick_halo_voxels(so, 1);
+        const BrickPlan plan = plan_bricks(mesh, o, h, halo);
+        o.brick_voxels = plan.brick_voxels;
+        o.brick_halo_voxels = halo;
+        r.memory_estimate_bytes = plan.estimate_bytes;
+    }
     r.distance = o.distance;
-    std::unique_ptr<ClosestTriangleQuery> query;
 #ifdef NORMALFLOW_HAS_CGAL
-    if (o.distance == DistanceQuery::CgalAabb) query = make_aabb_query(*mesh);
+    if (o.distance == DistanceQuery::CgalAabb) in.query = make_aabb_query(mesh);
 #endif
-    if (!query) query = make_bvh_query(*mesh);
-    Volume v = scan_convert(*mesh, *query, r.scan_options, &r.scan, progress);
+    if (!in.query) in.query = make_bvh_query(mesh);
+    return in;
+}
+
+Volume scan(const ScanInput& in, PipelineReport& r, Progress* progress) {
+    Stopwatch clock;
+    detail::begin(progress, "voxelize");
+    Volume v = scan_convert(*in.mesh, *in.query, r.scan_options, &r.scan, progress);
     append(r.warnings, r.scan.warnings);
     r.seconds.voxelize = clock.lap();
     r.seconds.total = r.seconds.repair + r.seconds.voxelize;
     r.peak_memory_bytes = peak_memory_bytes();
     return v;
+}
+
+/// The scan conversion and the engine brick by brick (smooth_in_bricks), reported as the two stages.
+Volume scan_and_smooth_in_bricks(const ScanInput& in, const Mesh& input, PipelineReport& r, Progress* progress,
+                                 const SmoothCheckpoint* checkpoint) {
+    const Mesh& mesh = *in.mesh;
+    const Grid grid = scan_grid(mesh, r.scan_options);
+    const double noise = estimate_noise(input).sigma;
+    const SmoothOptions so = engine_options(in.o, grid.voxel_size, model_length_scale(input), noise, &r);
+    std::unique_ptr<WindingNumber> wn;
+    if (r.scan_options.shell_thickness == 0) wn = std::make_unique<WindingNumber>(mesh);
+    BrickOptions b;
+    b.brick_voxels = in.o.brick_voxels;
+    b.halo_voxels = in.o.brick_halo_voxels;
+    r.scan.grid = grid;
+    Volume v =
+        smooth_in_bricks(mesh, *in.query, wn.get(), r.scan_options, so, b, &r.bricks, &r.smooth, progress, checkpoint);
+    r.bricked = true;
+    r.smoothed = true;
+    r.scan.blocks = v.block_count();
+    r.scan.memory_bytes = v.memory_bytes();
+    append(r.warnings, r.smooth.warnings);
+    r.seconds.voxelize = r.bricks.seconds_scan;
+    r.seconds.smooth = r.bricks.seconds_smooth;
+    r.seconds.total = r.seconds.repair + r.seconds.voxelize + r.seconds.smooth;
+    r.peak_memory_bytes = peak_memory_bytes();
+    return v;
+}
+
+/// The area of m's triangles binned by the cell of `cell` voxels of grid g that holds each one's centroid, as a
+/// summed-volume table: the area of any box of cells in 8 lookups.
+struct AreaGrid {
+    std::array<int, 3> dims{1, 1, 1};  // cells
+    std::vector<double> sum;           // (dims + 1)³: sum[i][j][k] = area of the cells below (i, j, k)
+    double total = 0;
+    double at(int i, int j, int k) const {
+        return sum[(std::size_t(k) * std::size_t(dims[1] + 1) + std::size_t(j)) * std::size_t(dims[0] + 1) +
+                   std::size_t(i)];
+    }
+    /// The area of the cells lo <= (i, j, k) < hi (clipped to the grid).
+    double box(std::array<int, 3> lo, std::array<int, 3> hi) const {
+        for (int d = 0; d < 3; ++d) {
+            lo[d] = std::clamp(lo[d], 0, dims[d]);
+            hi[d] = std::clamp(hi[d], lo[d], dims[d]);
+        }
+        return at(hi[0], hi[1], hi[2]) - at(lo[0], hi[1], hi[2]) - at(hi[0], lo[1], hi[2]) - at(hi[0], hi[1], lo[2]) +
+               at(lo[0], lo[1], hi[2]) + at(lo[0], hi[1], lo[2]) + at(hi[0], lo[1], lo[2]) - at(lo[0], lo[1], lo[2]);
+    }
+};
+
+AreaGrid bin_area(const Mesh& m, const Grid& g, int cell) {
+    AreaGrid a;
+    for (int d = 0; d < 3; ++d) a.dims[d] = std::max(1, (g.dims[d] + cell - 1) / cell);
+    const std::size_t nx = std::size_t(a.dims[0]) + 1, ny = std::size_t(a.dims[1]) + 1, nz = std::size_t(a.dims[2]) + 1;
+    a.sum.assign(nx * ny * nz, 0.0);
+    const auto idx = [&](std::size_t i, std::size_t j, std::size_t k) { return (k * ny + j) * nx + i; };
+    for (const Tri& t : m.triangles) {
+        const Vec3d p(m.positions[t[0]]), q(m.positions[t[1]]), w(m.positions[t[2]]);
+        const double area = 0.5 * norm(cross(q - p, w - p));
+        const Vec3d c = g.index((p + q + w) / 3.0);
+        std::size_t cidx[3];
+        for (int d = 0; d < 3; ++d) cidx[d] = std::size_t(std::clamp(int(std::floor(c[d] / cell)), 0, a.dims[d] - 1));
+        a.sum[idx(cidx[0] + 1, cidx[1] + 1, cidx[2] + 1)] += area;
+        a.total += area;
+    }
+    for (std::size_t k = 1; k < nz; ++k)
+        for (std::size_t j = 1; j < ny; ++j)
+            for (std::size_t i = 1; i < nx; ++i)
+                a.sum[idx(i, j, k)] += a.sum[idx(i - 1, j, k)] + a.sum[idx(i, j - 1, k)] + a.sum[idx(i, j, k - 1)] -
+                                       a.sum[idx(i - 1, j - 1, k)] - a.sum[idx(i - 1, j, k - 1)] -
+                                       a.sum[idx(i, j - 1, k - 1)] + a.sum[idx(i - 1, j - 1, k - 1)];
+    return a;
+}
+
+}  // namespace
+
+SmoothOptions engine_options(const PipelineOptions& o, double voxel_size, double default_length_scale, double noise,
+                             PipelineReport* report) {
+    PipelineReport local;
+    PipelineReport& r = report ? *report : local;
+    SmoothOptions so = o.smooth;
+    if (so.length_scale == 0) {
+        r.length_scale = o.length_scale > 0 ? o.length_scale : default_length_scale;
+        so.length_scale = float(r.length_scale / voxel_size);
+    } else {
+        r.length_scale = double(so.length_scale) * voxel_size;
+    }
+    r.noise = noise;
+    if (so.sigma_spatial == 0) so.sigma_spatial = float(auto_sigma_spatial(noise, r.length_scale, voxel_size));
+    r.sigma_spatial = so.sigma_spatial;
+    return so;
+}
+
+BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int halo_voxels) {
+    BrickPlan plan;
+    const ScanConvertOptions s = effective_scan_options(o);
+    const MemoryEstimate e = estimate_memory(m, h, kEngineBandVoxels);
+    if (o.brick_voxels == 0) {
+        try {
+            plan.estimate_bytes = check_memory(m, o);
+            return plan;  // the whole volume fits
+        } catch (const OutOfMemory&) {}
+    }
+    const std::size_t limit = o.max_memory_bytes > 0 ? o.max_memory_bytes : available_memory_bytes();
+    ScanConvertOptions grid_options = s;
+    grid_options.voxel_size = h;
+    const Grid grid = scan_grid(m, grid_options);
+    // The engine's bytes per unit of area (smooth_bytes without the block table), the result's band per copy
+    // (φ alone: one float of the engine's 17), the mesh with its search trees.
+    const double engine_per_area = (e.smooth_bytes - e.grid_samples / 512 * 4) / std::max(1e-300, e.surface_blocks);
+    const double band_bytes = (e.smooth_bytes - e.grid_samples / 512 * 4) / 17.0 + e.grid_samples / 512 * 4;
+    const double mesh_bytes = double(m.positions.size()) * 12 + double(m.triangles.size()) * 160;
+    // voxels: the cells the input's area is binned into (at most 256 along the longest axis)
+    const int kCell = std::max(32, (std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) + 255) / 256);
+    const AreaGrid area = bin_area(m, grid, kCell);
+    const auto estimate = [&](int brick) {
+        // the largest area one window holds (the cells it touches), in the estimate's surface blocks
+        const int halo_cells = (halo_voxels + kCell - 1) / kCell, brick_cells = (brick + kCell - 1) / kCell;
+        double worst = 0;
+        for (int k0 = 0; k0 < area.dims[2]; k0 += brick_cells)
+            for (int j0 = 0; j0 < area.dims[1]; j0 += brick_cells)
+                for (int i0 = 0; i0 < area.dims[0]; i0 += brick_cells)
+                    worst =
+                        std::max(worst, area.box({i0 - halo_cells, j0 - halo_cells, k0 - halo_cells},
+                                                 {i0 + brick_cells + halo_cells + 1, j0 + brick_cells + halo_cells + 1,
+                                                  k0 + brick_cells + halo_cells + 1}));
+        const double share = area.total > 0 ? worst / area.total : 1.0;
+        return mesh_bytes + 2 * band_bytes + share * e.surface_blocks * engine_per_area;
+    };
+    double smallest = 0;
+    int tried = 0;
+    for (const int brick : {512, 384, 256, 192, 128, 96, 64}) {
+        if (o.brick_voxels > 0 && brick != 512) break;  // the size given, once
+        tried = o.brick_voxels > 0 ? o.brick_voxels : brick;
+        const double need = estimate(tried);
+        smallest = need;
+        if (limit == 0 || need <= double(limit)) {
+            plan.brick_voxels = tried;
+            plan.estimate_bytes = need;
+            return plan;
+        }
+    }
+    throw OutOfMemory("this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
+                      (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) +
+                      " voxels, more than the " + format_bytes(double(limit)) +
+                      (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
+                      "; lower --resolution or raise --max-memory");
+}
+
+Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, PipelineReport* report, Progress* progress) {
+    validate(options);
+    PipelineReport local;
+    PipelineReport& r = report ? *report : local;
+    const ScanInput in = prepare_scan(input, options, r, progress, false);
+    return scan(in, r, progress);
 }
 
 Mesh volume_to_mesh(const Volume& v, const PipelineOptions& o, PipelineReport* report, Progress* progress) {
@@ -521,7 +705,12 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
             scan.scan.resolution = std::clamp(int(std::ceil(longest / (2 * r.noise))),
                                               std::min(kAutoResolutionMin, automatic_resolution), automatic_resolution);
     }
-    Volume v = mesh_to_volume(m, scan, &r, progress);
+    // The engine brick by brick where the whole volume does not fit the memory (or bricks were asked for); not for
+    // the fit to the normal map, which reads the engine's last normals.
+    const ScanInput scan_input = prepare_scan(m, scan, r, progress, engine && !o.fit_to_normal_map);
+    const bool bricked = engine && scan_input.o.brick_voxels > 0;
+    Volume v;
+    if (!bricked) v = normalflow::scan(scan_input, r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
     // The fit of the input to a smoothed surface: the kept result where the fit is (KeepFilter::Volume, Fit), and auto's
     // keep or re-mesh on a closed input: it is kept when its fitted faces agree with the volume's normals
@@ -552,7 +741,11 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         return !keep;
     };
     const bool early = own_faces && !open && (keep || automatic);
-    if (engine) {
+    if (bricked) {
+        v = scan_and_smooth_in_bricks(scan_input, m, r, progress, early ? &go_on : nullptr);
+        r.seconds.smooth -= decision_seconds;  // the fit counts with the extraction, as below
+        r.seconds.extract += decision_seconds;
+    } else if (engine) {
         smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr,
                             early ? &go_on : nullptr);
         r.seconds.smooth -= decision_seconds;  // the fit counts with the extraction, as below
@@ -689,16 +882,7 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_len
     PipelineReport local;
     PipelineReport& r = report ? *report : local;
     Stopwatch clock;
-    SmoothOptions so = o.smooth;
-    if (so.length_scale == 0) {
-        r.length_scale = o.length_scale > 0 ? o.length_scale : default_length_scale;
-        so.length_scale = float(r.length_scale / v.grid.voxel_size);
-    } else {
-        r.length_scale = double(so.length_scale) * v.grid.voxel_size;
-    }
-    r.noise = noise;
-    if (so.sigma_spatial == 0) so.sigma_spatial = float(auto_sigma_spatial(noise, r.length_scale, v.grid.voxel_size));
-    r.sigma_spatial = so.sigma_spatial;
+    const SmoothOptions so = engine_options(o, v.grid.voxel_size, default_length_scale, noise, &r);
     r.smooth = smooth_volume(v, so, progress, normal_map, checkpoint);
     r.smoothed = true;
     append(r.warnings, r.smooth.warnings);

@@ -20,6 +20,7 @@
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #include "metrics/surface_distance.h"
+#include "normals/bricks.h"
 #include "normals/smooth.h"
 #include "pipeline/system_memory.h"
 #include "remesh/sharpen.h"
@@ -218,6 +219,12 @@ struct PipelineOptions {
     /// Refuse, before anything big is allocated, a run estimated to need more than this many
     /// bytes; 0: the memory the system has available now (MemAvailable).
     std::size_t max_memory_bytes = 0;
+    /// The engine brick by brick (smooth_in_bricks): the side of a brick, voxels (whole 8³ blocks); 0 (the default):
+    /// the whole volume at once where its estimate fits the memory limit (max_memory_bytes, or the memory available),
+    /// otherwise the largest bricks whose estimate fits (plan_bricks). A run that does not smooth does not brick.
+    int brick_voxels = 0;
+    /// The halo of a brick, voxels; 0: brick_halo_voxels (what one main iteration reaches).
+    int brick_halo_voxels = 0;
 };
 
 /// Wall seconds of each stage of a run.
@@ -275,6 +282,8 @@ struct PipelineReport {
     /// Kept: the faces of the result, and of the input, that point against the volume's surface (the smoothed one,
     /// or the input's own where the engine did not run: KeepFilter::Faces); -1 otherwise.
     long long flipped_faces = -1, input_flipped_faces = -1;
+    bool bricked = false;  ///< the engine ran brick by brick (options.brick_voxels, or a volume over the memory limit)
+    BrickReport bricks;    ///< valid when bricked
     PipelineSeconds seconds;
     std::size_t peak_memory_bytes = 0;  ///< peak resident memory of the process at the end (Linux; 0 elsewhere)
     std::vector<std::string> warnings;  ///< every stage's warnings, in stage order
@@ -443,6 +452,24 @@ double model_length_scale(const Mesh& m);
 /// within [kAutoResolutionMin, kAutoResolutionMax], lowered by 10% steps while check_memory
 /// refuses it (the last step's refusal is then check_memory's to give).
 int auto_resolution(const Mesh& m, const PipelineOptions& options);
+
+/// The bricks a smoothing run of m takes (PipelineOptions::brick_voxels): their side in voxels (0: none, the whole
+/// volume at once) and the estimated peak. With brick_voxels = 0, none where the whole run's estimate (check_memory)
+/// fits the limit; otherwise the largest side of 512, 384, 256, 192, 128, 96 or 64 voxels whose estimate fits: the
+/// mesh and its search trees, two copies of the result's band (φ only) and one brick's engine, sized by the largest
+/// area of the input that one window (brick and halo) holds. halo_voxels: the halo the engine needs (voxels).
+/// \throw OutOfMemory when no brick size fits (the message names the limit and the smallest estimate).
+struct BrickPlan {
+    int brick_voxels = 0;
+    double estimate_bytes = 0;
+};
+BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& options, double voxel_size, int halo_voxels);
+
+/// The engine's options of a run on a grid of voxel_size: options.smooth with its length scale in voxels
+/// (options.length_scale, or default_length_scale) and sigma_spatial's automatic value (auto_sigma_spatial of noise)
+/// resolved; report (optional) receives the length scale, noise and sigma_spatial.
+SmoothOptions engine_options(const PipelineOptions& options, double voxel_size, double default_length_scale,
+                             double noise, PipelineReport* report = nullptr);
 
 /// Checks every option smooth_mesh uses before any work is done.
 /// \throw InvalidInput naming the field ("scan.resolution = 0: expected >= 1").

@@ -57,6 +57,8 @@ Json to_json(const SmoothReport& r) {
         if (!it.refit_energy.empty()) {
             d0.push_back(it.refit_energy_start());
             d1.push_back(it.refit_energy_end);
+        }
+        if (!it.refit_energy.empty() || it.refit_evaluations > 0) {  // bricks: the most of any brick, no energies
             steps.push_back(it.refit_steps);
             evals.push_back(it.refit_evaluations);
         }
@@ -172,6 +174,20 @@ Json to_json(const PipelineReport& r) {
     vox.set("band_half_width", r.scan_options.half_width);
     j.set("voxelize", vox);
     if (r.smoothed) j.set("smooth", to_json(r.smooth)).set("length_scale", r.length_scale);
+    if (r.bricked) {
+        const BrickReport& b = r.bricks;
+        Json n = Json::array();
+        for (int c : b.bricks) n.push(c);
+        j.set("bricks", Json::object()
+                            .set("brick_voxels", b.brick_voxels)
+                            .set("halo_voxels", b.halo_voxels)
+                            .set("bricks", n)
+                            .set("bricks_run", b.bricks_run)
+                            .set("iterations", b.passes)
+                            .set("largest_window_blocks", b.largest_window_blocks)
+                            .set("seconds_scan", b.seconds_scan)
+                            .set("seconds_smooth", b.seconds_smooth));
+    }
     if (r.smoothed || r.noise > 0) j.set("noise", r.noise);
     j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");
     if (r.fitted) {

@@ -129,8 +129,15 @@ void write_volume_result(const std::string& output, const Volume& v, Progress* p
     f.summary = output + " (the smoothed volume, " + std::to_string(v.block_count()) + " blocks)";
 }
 
-/// The notes of an engine that stopped before its last main iteration.
+/// The notes of an engine that stopped before its last main iteration, or that ran brick by brick.
 void stop_notes(const PipelineOptions& opt, const PipelineReport& r, FileRun& f) {
+    if (r.bricked)
+        f.notes.push_back("the engine ran brick by brick: " + std::to_string(r.bricks.total()) + " bricks of " +
+                          std::to_string(r.bricks.brick_voxels) + " voxels with a halo of " +
+                          std::to_string(r.bricks.halo_voxels) +
+                          (opt.brick_voxels > 0 ? " (--brick-size)"
+                                                : ", the whole volume being more than the memory allows (about " +
+                                                      format_bytes(r.memory_estimate_bytes) + " in bricks)"));
     if (r.smooth.stopped_unchanged)
         f.notes.push_back(
             "stopped after main iteration " + std::to_string(r.smooth.iterations_run()) + " of " +

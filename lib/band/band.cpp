@@ -205,15 +205,19 @@ void Band::build_active(float active_band) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nblocks(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
             const auto& c = coords_[b];
-            int ext[3];
-            for (int a = 0; a < 3; ++a) ext[a] = std::min(kBlockDim, grid_.dims[a] - c[a] * kBlockDim);
+            int lo[3], ext[3];  // the block's samples that may be active: lo <= local < ext
+            for (int a = 0; a < 3; ++a) {
+                ext[a] = std::min(kBlockDim, grid_.dims[a] - fixed_hi_[a] - c[a] * kBlockDim);
+                lo[a] = std::max(0, fixed_lo_[a] - c[a] * kBlockDim);
+            }
             std::uint32_t cnt = 0;
             const std::size_t base = b * kBlockVoxels;
             for (int z = 0; z < kBlockDim; ++z)
                 for (int y = 0; y < kBlockDim; ++y)
                     for (int x = 0; x < kBlockDim; ++x) {
                         const std::size_t i = base + std::size_t(bidx(x, y, z));
-                        const bool a = x < ext[0] && y < ext[1] && z < ext[2] && std::abs(phi_[i]) <= band;
+                        const bool a = x >= lo[0] && y >= lo[1] && z >= lo[2] && x < ext[0] && y < ext[1] &&
+                                       z < ext[2] && std::abs(phi_[i]) <= band;
                         mask_[i] = a;
                         cnt += a;
                     }

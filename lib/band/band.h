@@ -73,6 +73,12 @@ public:
     /// The mask of the samples with |φ| <= active_band (inside the grid) and the list of the blocks
     /// that hold any (active()).
     void build_active(float active_band);
+    /// Samples within lo[a] voxels of the grid's low side along axis a, or hi[a] of its high side, are never active:
+    /// they keep their values (a Dirichlet border, for a window of a larger grid worked on alone).
+    void set_fixed_border(const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+        fixed_lo_ = lo;
+        fixed_hi_ = hi;
+    }
 
     /// The volume from φ: world units, the band's blocks, half width kHalfWidth.
     void write_back(Volume& v) const;
@@ -127,6 +133,7 @@ private:
     void make_neighbourhood(std::size_t b, Neighbourhood& n) const;
 
     Grid grid_;
+    std::array<int, 3> fixed_lo_{0, 0, 0}, fixed_hi_{0, 0, 0};
     float reinit_limit_ = 0.0f;
     std::array<int, 3> block_dims_{};
     std::vector<std::int32_t> table_;

@@ -19,14 +19,18 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 int round_up(int v, int to) { return (v + to - 1) / to * to; }
 
+/// Voxels along a window's sides inside the grid that the engine does not update (SmoothOptions::fixed_lo): its
+/// stencils reach 2 voxels, so the samples they read there are the window's own, held as they came.
+constexpr int kFixedBorder = 4;
+
 // One main iteration over the bricks: each brick's window, scan-converted (the first iteration) or copied from the
 // last iteration's result `from`, runs one iteration of the engine; its interior goes into `to`.
 struct Pass {
-    SmoothIteration record;    // the iteration over the whole: sums over the bricks, the roughness their average
-    double roughness_sum = 0;  // Σ roughness × filtered samples, over the bricks
+    SmoothIteration record;  // the iteration over the whole: sums over the bricks, the roughness their average
+    std::vector<std::uint64_t> roughness;        // the bricks' interiors' roughness histograms summed
     double volume_change = 0, volume_slope = 0;  // Σ over the bricks' interiors (defer_volume_shift)
     std::vector<std::string> warnings;
-    bool any = false;   // some brick's engine ran
+    bool any = false;    // some brick's engine ran
     bool moved = false;  // some brick's refit kept a step
 };
 
@@ -56,8 +60,8 @@ Volume window_of(const Volume& from, const BlockWindow& w) {
 // reinitialise_only: each window of `from` only reinitialised (reinitialise_volume), as a run ends.
 Pass run_pass(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn, const Grid& grid,
               const ScanConvertOptions& scan, const SmoothOptions& opt, int brick_blocks, int halo_blocks,
-              const Volume* from, Volume& to, BrickReport& rep, Progress* progress, double done_before,
-              double share, bool reinitialise_only = false) {
+              const Volume* from, Volume& to, BrickReport& rep, Progress* progress, double done_before, double share,
+              bool reinitialise_only = false) {
     Pass result;
     const auto& gbd = to.block_dims;
     const int total = rep.total();
@@ -92,8 +96,11 @@ Pass run_pass(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber*
                 } else if (interior_band) {
                     SmoothOptions brick = opt;
                     for (int a = 0; a < 3; ++a) {
-                        brick.volume_lo[a] = lo[a] - w.lo[a];
-                        brick.volume_hi[a] = hi[a] - w.lo[a];
+                        brick.window_lo[a] = lo[a] - w.lo[a];
+                        brick.window_hi[a] = hi[a] - w.lo[a];
+                        // the window's sides within the grid hold still: the surface runs on past them
+                        brick.fixed_lo[a] = w.lo[a] > 0 ? kFixedBorder : 0;
+                        brick.fixed_hi[a] = w.hi[a] < gbd[a] ? kFixedBorder : 0;
                     }
                     t0 = Clock::now();
                     SmoothReport r = smooth_volume(sub, brick);
@@ -103,7 +110,10 @@ Pass run_pass(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber*
                         rep.largest_window_blocks = std::max(rep.largest_window_blocks, sub.block_count());
                         const SmoothIteration& it = r.iterations.front();
                         SmoothIteration& sum = result.record;
-                        result.roughness_sum += double(it.roughness) * double(it.filter_points);
+                        if (result.roughness.size() < it.roughness_histogram.size())
+                            result.roughness.resize(it.roughness_histogram.size(), 0);
+                        for (std::size_t h = 0; h < it.roughness_histogram.size(); ++h)
+                            result.roughness[h] += it.roughness_histogram[h];
                         sum.filter_points += it.filter_points;
                         sum.band_voxels += it.band_voxels;
                         sum.allocated_voxels += it.allocated_voxels;
@@ -138,8 +148,7 @@ Pass run_pass(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber*
                 ++done;
                 detail::tick(progress, done_before + share * double(done) / total, "smooth_in_bricks");
             }
-    if (result.record.filter_points > 0)
-        result.record.roughness = float(result.roughness_sum / double(result.record.filter_points));
+    result.record.roughness = roughness_of_histogram(result.roughness);
     result.record.seconds = seconds_since(t_pass);
     return result;
 }
@@ -191,7 +200,7 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     SmoothOptions one = opt;
     one.iterations = 1;
     one.refit_whole_time = true;
-    one.defer_volume_shift = keep_volume;
+    one.defer_volume_shift = true;  // the volume constraint (where kept) and the roughness over the interiors
     one.final_reinitialise = false;
     SmoothReport sr;
     Volume cur, next;

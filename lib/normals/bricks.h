@@ -38,7 +38,7 @@ struct BrickReport {
     int halo_voxels = 0;                 ///< the halo, voxels (whole blocks)
     std::array<int, 3> bricks{0, 0, 0};  ///< bricks along x, y, z
     int bricks_run = 0;  ///< bricks whose engine ran (their interior near a surface), summed over the iterations
-    int passes = 0;                      ///< main iterations run over the bricks
+    int passes = 0;      ///< main iterations run over the bricks
     std::size_t largest_window_blocks = 0;  ///< the most allocated blocks one brick's window held in the engine
     double seconds_scan = 0;                ///< wall seconds of the windows' scan conversions
     double seconds_smooth = 0;              ///< wall seconds of the engine over the bricks (reinitialisation too)
@@ -52,7 +52,7 @@ struct BrickReport {
 /// copied into the next one. Between iterations the run does what the one run does, in the same order, on the
 /// whole surface: the volume constraint's shift (preserve_volume: the bricks' interiors' volume changes and slopes
 /// summed, SmoothOptions::defer_volume_shift), the filters' automatic stop (opt.iterations = 0: the roughness of
-/// the iteration, the bricks' own averaged with the weight of their filtered samples), the checkpoint, and then the
+/// the iteration over the bricks' interiors' samples together, SmoothIteration::roughness_histogram), the checkpoint, and then the
 /// band moved and φ reinitialised. Within an iteration each brick's refit keeps its whole time
 /// (SmoothOptions::refit_whole_time), as the whole run does wherever D falls to the end. The result has the grid
 /// and layout smooth_volume returns (a band of engine::kHalfWidth voxels). Memory: one window's engine at a time,

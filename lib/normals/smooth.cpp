@@ -84,12 +84,12 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
             const bool deferred = keep && opt.defer_volume_shift;
             double volume = 0.0;
             if (deferred)
-                window_volume(band, opt.volume_lo, opt.volume_hi, record.volume_before, record.volume_slope);
+                window_volume(band, opt.window_lo, opt.window_hi, record.volume_before, record.volume_slope);
             else if (keep)
                 volume = active_volume(band);
             refit_to_normals(c, filter->refit_rules());
             if (deferred)
-                window_volume(band, opt.volume_lo, opt.volume_hi, record.volume_after, record.volume_slope);
+                window_volume(band, opt.window_lo, opt.window_hi, record.volume_after, record.volume_slope);
             else if (keep && record.refit_steps > 0)
                 record.volume_shift = restore_volume(band, volume);
             if (normal_map)  // this iteration's N, the last one's in the end (the band moves next)
@@ -242,6 +242,7 @@ SmoothReport smooth_volume(Volume& v, const SmoothOptions& options, Progress* pr
             rep.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");
             return;
         }
+        band.set_fixed_border(opt.fixed_lo, opt.fixed_hi);
         run(band, opt, rep, progress, options.iterations != 0, normal_map, checkpoint, v);
         band.write_back(v);
     };

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -103,20 +104,27 @@ struct SmoothOptions {
         ///< stage, D doubled) or a first one that already raises D is undone, and the rest of the
         ///< refit time starts again in super steps from there (up to twice), then in explicit steps. 0: the explicit steps of refit_dt (the default before version 0.2).
     bool refit_whole_time = false;  ///< Bilateral, Guided, TotalVariation with refit_super_steps > 0: keep every super
-        ///< step that stays finite and below twice the lowest D (no patient stop, no undoing a last one that
-        ///< raised D). For work done brick by brick (smooth_in_bricks), where D is a window's, not the whole
-        ///< surface's, and a window's border alone can raise it; the whole run keeps every super step wherever D
-        ///< falls to the end, as it does on every iteration of the study's pairs.
+        ///< step that stays finite, whatever D does (no patient stop, no undoing a super step that raised D or
+        ///< doubled it, no restart in explicit steps for one). For work done brick by brick (smooth_in_bricks),
+        ///< where D is a window's, not the whole surface's, and a window's border alone can raise it; the whole
+        ///< run keeps every super step wherever D falls to the end, as on fandisk_n0.3 at 256 and 512 and most
+        ///< of the study's pairs (docs/history/benchmarks-2026.md, "Bricks").
     /// For work done brick by brick (smooth_in_bricks): with preserve_volume, measure the volume before and after
-    /// each refit over the blocks volume_lo <= (bi, bj, bk) < volume_hi only (SmoothIteration::volume_before, ...)
-    /// and leave the shift that restores it to the caller, who sums the bricks' measures.
+    /// each refit over the blocks window_lo <= (bi, bj, bk) < window_hi only (SmoothIteration::volume_before, ...)
+    /// and leave the shift that restores it to the caller, who sums the bricks' measures; and count the filters'
+    /// roughness over the same blocks in SmoothIteration::roughness_histogram, which the caller merges.
     bool defer_volume_shift = false;
-    std::array<int, 3> volume_lo{0, 0, 0};
-    std::array<int, 3> volume_hi{0, 0, 0};
+    std::array<int, 3> window_lo{0, 0, 0};
+    std::array<int, 3> window_hi{0, 0, 0};
     /// false: the volume is what smooth_volume returned (its band and φ a signed distance out to the half width, as
     /// a run leaves them), and the first iteration reads it as it is instead of reinitialising it first. A run in
     /// steps (smooth_in_bricks, one iteration at a time) then reads φ as the one run would have.
     bool reinitialise_input = true;
+    /// Voxels at the grid's low (fixed_lo) and high (fixed_hi) side along each axis that no stage updates: a
+    /// Dirichlet border for a window of a larger grid worked on alone (smooth_in_bricks), whose surface runs on past
+    /// its sides. 0: none (the grid's border is zero-flux).
+    std::array<int, 3> fixed_lo{0, 0, 0};
+    std::array<int, 3> fixed_hi{0, 0, 0};
     /// false: the last iteration leaves φ as its refit (and volume constraint) left it, the band where that
     /// iteration had it, not reinitialised: for a run in steps whose caller changes φ before the next step
     /// (smooth_in_bricks' volume constraint over the whole surface) and reinitialises it then
@@ -178,6 +186,11 @@ inline constexpr float kDefaultLengthScale = 4.0f;
 /// would only erode curved detail (measured on the study's pairs after one iteration: 0.013–0.017 on
 /// fertility, igea, pierrot and the clean fandisk, which lose 0.2–1.9° with a second; 0.046–0.64 on
 /// the noisy CAD pairs, which gain 0.6–16°).
+/// Bins of SmoothIteration::roughness_histogram over [0, 2).
+inline constexpr int kRoughnessBins = 2048;
+/// The 75th percentile of a roughness histogram (the centre of its bin: within 1/2048 of the samples' own), as
+/// SmoothIteration::roughness takes it of the samples; 0 for an empty one.
+float roughness_of_histogram(const std::vector<std::uint64_t>& histogram);
 inline constexpr int kNeighbourhoodIterations = 2;
 inline constexpr float kNeighbourhoodRoughness = 0.03f;
 inline constexpr int kNeighbourhoodPasses = 10;
@@ -212,10 +225,14 @@ struct SmoothIteration {
     float mu = 0;                       ///< Anisotropic: the conductance scale µ used (1/voxel); 0 for
                                         ///< the other modes
     float volume_shift = 0;             ///< voxels: the shift preserve_volume applied (positive: outwards)
-    /// defer_volume_shift: the volume (voxels³) inside the surface over volume_lo … volume_hi before and after the
+    /// defer_volume_shift: the volume (voxels³) inside the surface over window_lo … window_hi before and after the
     /// refit, and its slope against a uniform shift of φ (voxels²): the shift that restores it is
     /// (volume_after − volume_before) / volume_slope outwards.
     double volume_before = 0, volume_after = 0, volume_slope = 0;
+    /// defer_volume_shift, the surface-sample filters: how many surface samples of the window left each roughness,
+    /// in kRoughnessBins bins over [0, 2) (the chord between two unit normals): the roughness of several windows
+    /// together is the 75th percentile of their summed histograms (roughness_of_histogram).
+    std::vector<std::uint32_t> roughness_histogram;
     float roughness = 0;          ///< Bilateral, Guided, TotalVariation: what the filter left, the 75th percentile of
                                   ///< |N_i − M_i| over the surface samples, M_i the plain Gaussian mean
                                   ///< of the filtered normals over i's disc (0 for the other modes)

@@ -16,6 +16,7 @@
 #include "core/mesh_report.h"
 #include "extract/surface_attributes.h"
 #include "io/io.h"
+#include "metrics/surface_distance.h"
 #include "pipeline/report_json.h"
 #include "sdf/sdf_test_meshes.h"
 #include "support/attributed_mesh.h"
@@ -247,6 +248,56 @@ TEST(Pipeline, MemoryLimitRefusesWithOutOfMemory) {
     (void)mesh_to_volume(test::icosphere(1.0, 2), o, &rep);
     EXPECT_GT(rep.memory_estimate_bytes, 0);
     EXPECT_EQ(check_memory(Mesh{}, o), 0);
+}
+
+// Bricks (issue 41): asked for, or where the whole volume does not fit the memory limit, the engine runs brick by
+// brick and the result is the whole run's surface within 0.05 voxel (sampled both ways), closed and manifold; a limit
+// that no brick size fits is refused.
+TEST(Pipeline, OverTheMemoryLimitTheEngineRunsInBricksAndGivesTheWholeRunsSurface) {
+    Mesh m = test::icosphere(1.0, 4);
+    for (std::size_t i = 0; i < m.positions.size(); ++i)  // deterministic radial noise of ±1.5%
+        m.positions[i] *= float(1.0 + 0.015 * std::sin(double(i) * 12.9898));
+    PipelineOptions o;
+    o.scan.resolution = 80;
+    o.connectivity = Connectivity::Remesh;
+    o.full_density = true;
+    const PipelineResult whole = smooth_mesh(m, o);
+    EXPECT_FALSE(whole.report.bricked);
+    const double h = whole.report.scan.grid.voxel_size;
+    PipelineOptions b = o;
+    b.brick_voxels = 32;
+    const PipelineResult bricked = smooth_mesh(m, b);
+    ASSERT_TRUE(bricked.report.bricked);
+    EXPECT_EQ(bricked.report.bricks.brick_voxels, 32);
+    EXPECT_GE(bricked.report.bricks.total(), 27);
+    EXPECT_EQ(bricked.report.smooth.iterations_run(), whole.report.smooth.iterations_run());
+    EXPECT_TRUE(bricked.report.output.closed);
+    EXPECT_TRUE(bricked.report.output.manifold);
+    EXPECT_LT(sampled_hausdorff(bricked.mesh, whole.mesh).hausdorff, 0.05 * h);
+    // The whole run over the limit: bricks instead of a refusal (the largest that fit), their estimate within the
+    // limit. A finer grid, whose windows (a brick and a halo of 16 voxels) hold a fraction of the surface.
+    PipelineOptions fine = o;
+    fine.scan.resolution = 160;
+    fine.brick_halo_voxels = 16;
+    const double need = check_memory(m, fine);
+    const double h2 = h * 80 / 160;
+    PipelineOptions limited = fine;
+    limited.max_memory_bytes = std::size_t(0.8 * need);
+    const BrickPlan plan = plan_bricks(m, limited, h2, 16);
+    EXPECT_GT(plan.brick_voxels, 0);
+    EXPECT_LE(plan.estimate_bytes, 0.8 * need);
+    limited.max_memory_bytes = std::size_t(plan.estimate_bytes * 1.001);
+    limited.smooth.iterations = 1;
+    const PipelineResult r = smooth_mesh(m, limited);
+    EXPECT_TRUE(r.report.bricked);
+    EXPECT_EQ(r.report.bricks.brick_voxels, plan.brick_voxels);
+    EXPECT_LE(r.report.memory_estimate_bytes, double(limited.max_memory_bytes));
+    EXPECT_TRUE(r.report.output.closed);
+    // No brick size fits: refused, as the whole run is.
+    b.brick_voxels = 0;
+    b.max_memory_bytes = 1 << 16;
+    const std::string msg = message_of<OutOfMemory>([&] { (void)smooth_mesh(m, b); });
+    EXPECT_NE(msg.find("even in bricks"), std::string::npos) << msg;
 }
 
 TEST(Pipeline, BadOptionsThrowInvalidInputNamingTheField) {

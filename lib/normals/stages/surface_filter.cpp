@@ -124,6 +124,19 @@ void SurfaceSampleFilter::filter_normals(StageContext& c) {
 
     filter_samples(c, d);
     c.record().roughness = roughness(band, d.ks, d.r2);
+    if (c.opt.defer_volume_shift) {  // the window's histogram, for a caller that merges several windows' roughness
+        std::vector<std::uint32_t>& hist = c.record().roughness_histogram;
+        hist.assign(kRoughnessBins, 0);
+        for (std::size_t i = 0; i < S_.size(); ++i) {
+            if (!(consistency_[i] >= 0.0f)) continue;
+            const auto& bc = band.block_coord(S_.index[i] / kBlockVoxels);
+            bool inside = true;
+            for (int a = 0; a < 3; ++a) inside &= bc[a] >= c.opt.window_lo[a] && bc[a] < c.opt.window_hi[a];
+            if (!inside) continue;
+            const int bin = std::clamp(int(consistency_[i] * (kRoughnessBins / 2.0f)), 0, kRoughnessBins - 1);
+            ++hist[std::size_t(bin)];
+        }
+    }
     extend(c, d);
     c.record().normal_energy = normal_energy(c, g_before);
 }
@@ -141,6 +154,19 @@ int SurfaceSampleFilter::stride(const SmoothOptions& opt, float ell) const {
 }  // namespace normalflow::engine
 
 namespace normalflow {
+float roughness_of_histogram(const std::vector<std::uint64_t>& histogram) {
+    std::uint64_t n = 0;
+    for (const std::uint64_t c : histogram) n += c;
+    if (n == 0) return 0.0f;
+    const std::uint64_t q = n * 3 / 4;  // the sample nth_element puts there, counted from 0
+    std::uint64_t seen = 0;
+    for (std::size_t b = 0; b < histogram.size(); ++b) {
+        seen += histogram[b];
+        if (seen > q) return (float(b) + 0.5f) * (2.0f / float(histogram.size()));
+    }
+    return 2.0f;
+}
+
 int surface_sample_stride(const SmoothOptions& opt) {
     if (!is_neighbourhood_filter(opt.mode) || !opt.thin_samples) return 1;
     return std::max(1, int(std::floor(engine::length_scale(opt) / engine::kStrideLength)));
