@@ -125,9 +125,12 @@ Pass run_pass(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber*
                         result.moved |= it.refit_steps > 0 || !is_neighbourhood_filter(opt.mode);
                         result.any = true;
                     }
-                    for (const std::string& warning : r.warnings)
-                        if (std::find(result.warnings.begin(), result.warnings.end(), warning) == result.warnings.end())
-                            result.warnings.push_back(warning);
+                    // (a window whose surface lies beyond it, only its band's edge in the interior, has nothing to say)
+                    if (!r.iterations.empty())
+                        for (const std::string& warning : r.warnings)
+                            if (std::find(result.warnings.begin(), result.warnings.end(), warning) ==
+                                result.warnings.end())
+                                result.warnings.push_back(warning);
                 }
                 // The interior into the result: its blocks as the brick's engine left them, its tiles' signs.
                 for (int k = lo[2]; k < hi[2]; ++k)
@@ -221,7 +224,10 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         for (const std::string& w : p.warnings)
             if (std::find(sr.warnings.begin(), sr.warnings.end(), w) == sr.warnings.end()) sr.warnings.push_back(w);
         cur = std::move(next);
-        if (!p.any) break;  // no surface anywhere: the scan's volume, as smooth_volume returns one without a surface
+        if (!p.any) {  // no surface anywhere: the scan's volume, as smooth_volume returns one without a surface
+            sr.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");
+            break;
+        }
         raw = true;
         // The volume constraint on the whole surface: the bricks' interiors' changes and slopes summed.
         if (keep_volume && p.moved && p.volume_slope > 0) {
