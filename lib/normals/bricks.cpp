@@ -19,6 +19,12 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 
 int round_up(int v, int to) { return (v + to - 1) / to * to; }
 
+// Appends the warnings of `from` that `to` does not hold yet (each brick repeats the same ones).
+void add_new(std::vector<std::string>& to, const std::vector<std::string>& from) {
+    for (const std::string& w : from)
+        if (std::find(to.begin(), to.end(), w) == to.end()) to.push_back(w);
+}
+
 /// Voxels along a window's sides inside the grid that the engine does not update (SmoothOptions::fixed_lo): its
 /// stencils reach 2 voxels, so the samples they read there are the window's own, held as they came.
 constexpr int kFixedBorder = 4;
@@ -26,7 +32,7 @@ constexpr int kFixedBorder = 4;
 // One main iteration over the bricks: each brick's window, scan-converted (the first iteration) or copied from the
 // last iteration's result `from`, runs one iteration of the engine; its interior goes into `to`.
 struct Pass {
-    SmoothIteration record;  // the iteration over the whole: sums over the bricks, the roughness their average
+    SmoothIteration record;  // the iteration over the whole: sums over the bricks, the roughness of their histograms
     std::vector<std::uint64_t> roughness;        // the bricks' interiors' roughness histograms summed
     double volume_change = 0, volume_slope = 0;  // Σ over the bricks' interiors (defer_volume_shift)
     std::vector<std::string> warnings;
@@ -36,12 +42,7 @@ struct Pass {
 
 // The blocks of `from` in window w, as a volume of their own (the window's grid, the same band and tiles).
 Volume window_of(const Volume& from, const BlockWindow& w) {
-    Grid sub = from.grid;
-    for (int a = 0; a < 3; ++a) {
-        sub.origin[a] = from.grid.origin[a] + double(w.lo[a] * kBlockDim) * from.grid.voxel_size;
-        sub.dims[a] = std::min(w.hi[a] * kBlockDim, from.grid.dims[a]) - w.lo[a] * kBlockDim;
-    }
-    Volume v(sub, from.half_width);
+    Volume v(window_grid(from.grid, w), from.half_width);
     v.background = from.background;
     for (int k = w.lo[2]; k < w.hi[2]; ++k)
         for (int j = w.lo[1]; j < w.hi[1]; ++j)
@@ -126,11 +127,7 @@ Pass run_pass(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber*
                         result.any = true;
                     }
                     // (a window whose surface lies beyond it, only its band's edge in the interior, has nothing to say)
-                    if (!r.iterations.empty())
-                        for (const std::string& warning : r.warnings)
-                            if (std::find(result.warnings.begin(), result.warnings.end(), warning) ==
-                                result.warnings.end())
-                                result.warnings.push_back(warning);
+                    if (!r.iterations.empty()) add_new(result.warnings, r.warnings);
                 }
                 // The interior into the result: its blocks as the brick's engine left them, its tiles' signs.
                 for (int k = lo[2]; k < hi[2]; ++k)
@@ -221,8 +218,7 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         Pass p = run_pass(m, q, wn, grid, scan, one, brick_blocks, halo_blocks, it == 0 ? nullptr : &cur, next, rep,
                           progress, double(it) / iterations, 1.0 / iterations);
         ++rep.passes;
-        for (const std::string& w : p.warnings)
-            if (std::find(sr.warnings.begin(), sr.warnings.end(), w) == sr.warnings.end()) sr.warnings.push_back(w);
+        add_new(sr.warnings, p.warnings);
         cur = std::move(next);
         if (!p.any) {  // no surface anywhere: the scan's volume, as smooth_volume returns one without a surface
             sr.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");

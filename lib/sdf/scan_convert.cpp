@@ -225,11 +225,7 @@ Volume scan_window(const Mesh& m, const ClosestTriangleQuery& q, const WindingNu
     const double h = grid.voxel_size;
     const double hw = opt.half_width;
     const double shell_off = opt.shell_thickness * 0.5;
-    Grid sub = grid;
-    for (int a = 0; a < 3; ++a) {
-        sub.origin[a] = grid.origin[a] + double(w.lo[a] * kBlockDim) * h;
-        sub.dims[a] = std::min(w.hi[a] * kBlockDim, grid.dims[a]) - w.lo[a] * kBlockDim;
-    }
+    const Grid sub = window_grid(grid, w);
     Volume vol(sub, opt.half_width);
     const double bg = vol.background;
     const double reach = hw * h + shell_off;
@@ -425,6 +421,15 @@ Volume scan_window(const Mesh& m, const ClosestTriangleQuery& q, const WindingNu
 }
 
 }  // namespace
+
+Grid window_grid(const Grid& g, const BlockWindow& w) {
+    Grid sub = g;
+    for (int a = 0; a < 3; ++a) {
+        sub.origin[a] = g.origin[a] + double(w.lo[a] * kBlockDim) * g.voxel_size;
+        sub.dims[a] = std::min(w.hi[a] * kBlockDim, g.dims[a]) - w.lo[a] * kBlockDim;
+    }
+    return sub;
+}
 
 Grid scan_grid(const Mesh& m, const ScanConvertOptions& opt) {
     if (m.empty()) throw InvalidInput("scan_convert: empty mesh (no triangles)");

@@ -90,6 +90,10 @@ struct BlockWindow {
     std::array<int, 3> hi{0, 0, 0};
 };
 
+/// The grid of a window of g: its origin at the window's first sample, its dims clipped to g's (a volume over it
+/// has block (bi, bj, bk) where g has (bi + lo, ...)).
+Grid window_grid(const Grid& g, const BlockWindow& w);
+
 class WindingNumber;
 
 /// scan_convert restricted to the blocks of a window of `grid` (scan_grid(m, opt)), for work done brick by brick:
