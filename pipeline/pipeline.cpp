@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <string>
 #include <tuple>
@@ -213,19 +214,28 @@ Volume scan(const ScanInput& in, PipelineReport& r, Progress* progress) {
 
 /// The scan conversion and the engine brick by brick (smooth_in_bricks), reported as the two stages.
 Volume scan_and_smooth_in_bricks(const ScanInput& in, const Mesh& input, PipelineReport& r, Progress* progress,
-                                 const SmoothCheckpoint* checkpoint) {
+                                 const SmoothCheckpoint* checkpoint, const BrickMessageRunner* remote) {
     const Mesh& mesh = *in.mesh;
     const Grid grid = scan_grid(mesh, r.scan_options);
     const double noise = estimate_noise(input).sigma;
     const SmoothOptions so = engine_options(in.o, grid.voxel_size, model_length_scale(input), noise, &r);
     std::unique_ptr<WindingNumber> wn;
-    if (r.scan_options.shell_thickness == 0) wn = std::make_unique<WindingNumber>(mesh);
+    if (r.scan_options.shell_thickness == 0 && !remote) wn = std::make_unique<WindingNumber>(mesh);
     BrickOptions b;
     b.brick_voxels = in.o.brick_voxels;
     b.halo_voxels = in.o.brick_halo_voxels;
     r.scan.grid = grid;
-    Volume v =
-        smooth_in_bricks(mesh, *in.query, wn.get(), r.scan_options, so, b, &r.bricks, &r.smooth, progress, checkpoint);
+    // Elsewhere, as messages: the context (with the search the workers are to build) once per run.
+    std::string context;
+    const BrickRunner runner = [&](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+                                   const std::function<void(BrickOutcome &&)>& take) {
+        if (context.empty()) context = char(in.o.distance) + brick_context_message(c);
+        (*remote)(
+            context, count, [&](int i) { return brick_message(make(i)); },
+            [&](const std::string& outcome) { take(brick_outcome_from_message(outcome)); });
+    };
+    Volume v = smooth_in_bricks(mesh, *in.query, wn.get(), r.scan_options, so, b, &r.bricks, &r.smooth, progress,
+                                checkpoint, remote && *remote ? &runner : nullptr);
     r.bricked = true;
     r.smoothed = true;
     r.scan.blocks = v.block_count();
@@ -674,7 +684,8 @@ void check_output(const Mesh& m, PipelineReport& r, bool remeshed, bool closed, 
 
 }  // namespace
 
-PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* progress) {
+PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* progress,
+                           const BrickMessageRunner* bricks) {
     validate(o);  // every field, the engine's too where it will not run
     PipelineResult result;
     PipelineReport& r = result.report;
@@ -709,6 +720,10 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     // the fit to the normal map, which reads the engine's last normals.
     const ScanInput scan_input = prepare_scan(m, scan, r, progress, engine && !o.fit_to_normal_map);
     const bool bricked = engine && scan_input.o.brick_voxels > 0;
+    if (bricks && *bricks && !bricked)
+        r.warnings.push_back(engine ? "the run fits in memory whole: it ran here, not in bricks on the workers (give "
+                                      "brick-size to run it in bricks)"
+                                    : "the engine does not run for this input: nothing ran on the workers");
     Volume v;
     if (!bricked) v = normalflow::scan(scan_input, r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
@@ -742,7 +757,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     };
     const bool early = own_faces && !open && (keep || automatic);
     if (bricked) {
-        v = scan_and_smooth_in_bricks(scan_input, m, r, progress, early ? &go_on : nullptr);
+        v = scan_and_smooth_in_bricks(scan_input, m, r, progress, early ? &go_on : nullptr, bricks);
         r.seconds.smooth -= decision_seconds;  // the fit counts with the extraction, as below
         r.seconds.extract += decision_seconds;
     } else if (engine) {
@@ -930,6 +945,48 @@ void place_mesh(Mesh& m, const Placement& p) {
     }
     if (p.reflects())
         for (auto& t : m.triangles) std::swap(t[1], t[2]);
+}
+
+}  // namespace normalflow
+
+namespace normalflow {
+
+struct BrickWorker::State {
+    Mesh mesh;
+    BrickContext context;
+    DistanceQuery distance = DistanceQuery::EngineBvh;
+    std::once_flag built;
+    std::unique_ptr<ClosestTriangleQuery> query;
+    std::unique_ptr<WindingNumber> wn;
+};
+
+BrickWorker::BrickWorker(std::string_view context) : state_(std::make_unique<State>()) {
+    if (context.empty()) throw InvalidInput("brick context: the message is empty");
+    const int distance = static_cast<unsigned char>(context[0]);
+    if (distance != int(DistanceQuery::EngineBvh) && distance != int(DistanceQuery::CgalAabb))
+        throw InvalidInput("brick context: not a brick context of this build");
+    state_->distance = DistanceQuery(distance);
+    brick_context_from_message(context.substr(1), state_->context, state_->mesh);
+}
+
+BrickWorker::~BrickWorker() = default;
+
+std::string BrickWorker::run(std::string_view message) const {
+    BrickJob job = brick_job_from_message(message);
+    State& s = *state_;
+    BrickContext c = s.context;
+    if (job.scan) {
+        std::call_once(s.built, [&] {
+#ifdef NORMALFLOW_HAS_CGAL
+            if (s.distance == DistanceQuery::CgalAabb) s.query = make_aabb_query(s.mesh);
+#endif
+            if (!s.query) s.query = make_bvh_query(s.mesh);
+            if (s.context.scan.shell_thickness == 0) s.wn = std::make_unique<WindingNumber>(s.mesh);
+        });
+        c.query = s.query.get();
+        c.wn = s.wn.get();
+    }
+    return brick_message(run_brick(c, std::move(job)));
 }
 
 }  // namespace normalflow

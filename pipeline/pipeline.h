@@ -7,7 +7,10 @@
 /// build (CGAL adds its self-intersection check and fallback).
 
 #include <cstddef>
+#include <functional>
+#include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/mesh.h"
@@ -295,6 +298,14 @@ struct PipelineResult {
     PipelineReport report;
 };
 
+/// Where a bricked run's bricks run when not here (Python's client=, a Dask cluster), as messages: called once per
+/// pass over the bricks with the run's context (its mesh, grid and options; equal bytes on every pass of a run),
+/// the number of bricks, make(i): brick i's job, and take(outcome): a brick's outcome, given back in order of i.
+/// A worker runs a job with BrickWorker.
+using BrickMessageRunner =
+    std::function<void(const std::string& context, int count, const std::function<std::string(int)>& make,
+                       const std::function<void(const std::string&)>& take)>;
+
 /// Smooths a triangle mesh through its signed distance volume: repairs a copy of m (optional),
 /// scan-converts it (scan_convert) into a narrow band of max(scan.half_width,
 /// kSmoothingScanBandVoxels) voxels, filters the normal map and refits (smooth_volume, Tasdizen
@@ -318,7 +329,29 @@ struct PipelineResult {
 ///        NumericalError, Cancelled as the stages throw them.
 /// Messages do not name the input; a caller that has a file name prefixes it.
 /// Threading: scan.threads and smooth.threads; the result does not depend on them.
-PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& options = {}, Progress* progress = nullptr);
+/// \param bricks where a bricked run's bricks go (Python's client=, a Dask cluster); null: here. The result is the
+///        same either way, bit for bit. A run that does not brick ignores it (its report says so).
+PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& options = {}, Progress* progress = nullptr,
+                           const BrickMessageRunner* bricks = nullptr);
+
+/// What a worker of a bricked run does with its bricks (Python's Dask bricks): built from the run's context message
+/// (BrickMessageRunner), it runs the jobs' messages and returns their outcomes' (run_brick). The mesh's search and
+/// winding number are built on the first brick that scans its window, and kept. run() may be called from several
+/// threads at once.
+class BrickWorker {
+public:
+    /// \throw InvalidInput for a message that is not a brick context of this build.
+    explicit BrickWorker(std::string_view context);
+    ~BrickWorker();
+    BrickWorker(const BrickWorker&) = delete;
+    BrickWorker& operator=(const BrickWorker&) = delete;
+    /// \throw InvalidInput for a message that is not a job of this build; what run_brick throws.
+    std::string run(std::string_view job) const;
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
 
 /// The first half of smooth_mesh: validation, repair, memory check and scan conversion. When
 /// options.smoothing, the band is at least kSmoothingScanBandVoxels and the memory check counts the

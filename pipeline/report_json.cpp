@@ -186,7 +186,8 @@ Json to_json(const PipelineReport& r) {
                             .set("iterations", b.passes)
                             .set("largest_window_blocks", b.largest_window_blocks)
                             .set("seconds_scan", b.seconds_scan)
-                            .set("seconds_smooth", b.seconds_smooth));
+                            .set("seconds_smooth", b.seconds_smooth)
+                            .set("ran", b.elsewhere ? "elsewhere" : "here"));
     }
     if (r.smoothed || r.noise > 0) j.set("noise", r.noise);
     j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");

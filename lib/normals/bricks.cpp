@@ -4,11 +4,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numeric>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "band/layout.h"
 #include "core/errors.h"
+#include "core/version.h"
 
 namespace normalflow {
 
@@ -58,102 +62,188 @@ Volume window_of(const Volume& from, const BlockWindow& w) {
     return v;
 }
 
+// The blocks of window `in` (a volume over window_grid(grid, w)) within blocks lo … hi of the grid, as a volume of
+// their own over window_grid(grid, {lo, hi}): blocks and tile signs.
+Volume interior_of(const Volume& in, const Grid& grid, const BlockWindow& w, const std::array<int, 3>& lo,
+                   const std::array<int, 3>& hi) {
+    Volume v(window_grid(grid, BlockWindow{lo, hi}), in.half_width);
+    v.background = in.background;
+    for (int k = lo[2]; k < hi[2]; ++k)
+        for (int j = lo[1]; j < hi[1]; ++j)
+            for (int i = lo[0]; i < hi[0]; ++i) {
+                const std::int32_t s = in.block_table[in.table_index(i - w.lo[0], j - w.lo[1], k - w.lo[2])];
+                if (s < 0) {
+                    v.block_table[v.table_index(i - lo[0], j - lo[1], k - lo[2])] = s;
+                    continue;
+                }
+                const std::int32_t d = v.allocate_block(i - lo[0], j - lo[1], k - lo[2]);
+                std::copy_n(in.block_values(s), kBlockVoxels, v.block_values(d));
+            }
+    return v;
+}
+
+// The bricks one after the other, here.
+void run_here(const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+              const std::function<void(BrickOutcome&&)>& take) {
+    for (int i = 0; i < count; ++i) take(run_brick(c, make(i)));
+}
+
+// One main iteration over the bricks: each brick's window, scan-converted (the first iteration) or copied from the
+// last iteration's result `from`, runs one iteration of the engine; its interior goes into `to`.
 // reinitialise_only: each window of `from` only reinitialised (reinitialise_volume), as a run ends.
-Pass run_pass(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn, const Grid& grid,
-              const ScanConvertOptions& scan, const SmoothOptions& opt, int brick_blocks, int halo_blocks,
-              const Volume* from, Volume& to, BrickReport& rep, Progress* progress, double done_before, double share,
-              bool reinitialise_only = false) {
+Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks, int halo_blocks, const Volume* from,
+              Volume& to, BrickReport& rep, Progress* progress, double done_before, double share,
+              bool reinitialise_input, bool reinitialise_only = false) {
     Pass result;
     const auto& gbd = to.block_dims;
-    const int total = rep.total();
-    int done = 0;
+    std::array<int, 3> n{};
+    for (int a = 0; a < 3; ++a) n[a] = (gbd[a] + brick_blocks - 1) / brick_blocks;
+    const int total = n[0] * n[1] * n[2];
     const auto t_pass = Clock::now();
-    for (int bk = 0; bk < gbd[2]; bk += brick_blocks)
-        for (int bj = 0; bj < gbd[1]; bj += brick_blocks)
-            for (int bi = 0; bi < gbd[0]; bi += brick_blocks) {
-                const std::array<int, 3> lo{bi, bj, bk};
-                std::array<int, 3> hi{};
-                BlockWindow w;
-                for (int a = 0; a < 3; ++a) {
-                    hi[a] = std::min(lo[a] + brick_blocks, gbd[a]);
-                    w.lo[a] = std::max(0, lo[a] - halo_blocks);
-                    w.hi[a] = std::min(gbd[a], hi[a] + halo_blocks);
-                }
-                auto t0 = Clock::now();
-                Volume sub = from ? window_of(*from, w) : scan_convert_window(m, q, wn, grid, w, scan);
-                rep.seconds_scan += seconds_since(t0);
-                const auto slot = [&](const Volume& v, int i, int j, int k) {
-                    return v.block_table[v.table_index(i - w.lo[0], j - w.lo[1], k - w.lo[2])];
-                };
-                // Only a window whose interior holds (or lies within the band of) a surface runs the engine.
-                bool interior_band = false;
-                for (int k = lo[2]; k < hi[2] && !interior_band; ++k)
-                    for (int j = lo[1]; j < hi[1] && !interior_band; ++j)
-                        for (int i = lo[0]; i < hi[0] && !interior_band; ++i) interior_band = slot(sub, i, j, k) >= 0;
-                if (interior_band && reinitialise_only) {
-                    t0 = Clock::now();
-                    reinitialise_volume(sub, opt.threads);
-                    rep.seconds_smooth += seconds_since(t0);
-                } else if (interior_band) {
-                    SmoothOptions brick = opt;
-                    for (int a = 0; a < 3; ++a) {
-                        brick.window_lo[a] = lo[a] - w.lo[a];
-                        brick.window_hi[a] = hi[a] - w.lo[a];
-                        // the window's sides within the grid hold still: the surface runs on past them
-                        brick.fixed_lo[a] = w.lo[a] > 0 ? kFixedBorder : 0;
-                        brick.fixed_hi[a] = w.hi[a] < gbd[a] ? kFixedBorder : 0;
+    const auto place = [&](int index) {
+        BrickJob job;
+        job.index = index;
+        const std::array<int, 3> b{index % n[0], index / n[0] % n[1], index / (n[0] * n[1])};
+        for (int a = 0; a < 3; ++a) {
+            job.lo[a] = b[a] * brick_blocks;
+            job.hi[a] = std::min(job.lo[a] + brick_blocks, gbd[a]);
+            job.window.lo[a] = std::max(0, job.lo[a] - halo_blocks);
+            job.window.hi[a] = std::min(gbd[a], job.hi[a] + halo_blocks);
+        }
+        return job;
+    };
+    const auto make = [&](int index) {
+        if (index < 0 || index >= total) throw std::logic_error("smooth_in_bricks: no brick " + std::to_string(index));
+        BrickJob job = place(index);
+        job.scan = from == nullptr;
+        job.reinitialise_only = reinitialise_only;
+        job.reinitialise_input = reinitialise_input;
+        const auto t0 = Clock::now();
+        if (from) job.input = window_of(*from, job.window);
+        rep.seconds_scan += seconds_since(t0);
+        return job;
+    };
+    int next = 0;
+    const auto take = [&](BrickOutcome&& o) {
+        if (o.index != next)
+            throw std::logic_error("smooth_in_bricks: brick " + std::to_string(o.index) + " came back in place of " +
+                                   std::to_string(next));
+        ++next;
+        rep.seconds_scan += o.seconds_scan;
+        rep.seconds_smooth += o.seconds_smooth;
+        if (o.ran && !reinitialise_only) {
+            ++rep.bricks_run;
+            rep.largest_window_blocks = std::max(rep.largest_window_blocks, o.window_blocks);
+            const SmoothIteration& it = o.record;
+            SmoothIteration& sum = result.record;
+            if (result.roughness.size() < it.roughness_histogram.size())
+                result.roughness.resize(it.roughness_histogram.size(), 0);
+            for (std::size_t h = 0; h < it.roughness_histogram.size(); ++h)
+                result.roughness[h] += it.roughness_histogram[h];
+            sum.filter_points += it.filter_points;
+            sum.band_voxels += it.band_voxels;
+            sum.allocated_voxels += it.allocated_voxels;
+            sum.refit_steps = std::max(sum.refit_steps, it.refit_steps);
+            sum.refit_evaluations = std::max(sum.refit_evaluations, it.refit_evaluations);
+            sum.mu = std::max(sum.mu, it.mu);
+            result.volume_change += it.volume_after - it.volume_before;
+            result.volume_slope += it.volume_slope;
+            result.moved |= it.refit_steps > 0 || !is_neighbourhood_filter(c.engine.mode);
+            result.any = true;
+            add_new(result.warnings, o.warnings);
+        }
+        // The interior into the result: its blocks as the brick's engine left them, its tiles' signs.
+        const Volume& in = o.interior;
+        const std::array<int, 3> lo = place(o.index).lo;
+        if (in.block_table.size() != std::size_t(in.block_dims[0]) * in.block_dims[1] * in.block_dims[2] ||
+            in.values.size() != in.block_count() * kBlockVoxels)
+            throw InvalidInput("smooth_in_bricks: brick " + std::to_string(o.index) + " came back malformed");
+        for (int a = 0; a < 3; ++a)
+            if (lo[a] + in.block_dims[a] > gbd[a])
+                throw InvalidInput("smooth_in_bricks: brick " + std::to_string(o.index) + " came back too large");
+        for (int k = 0; k < in.block_dims[2]; ++k)
+            for (int j = 0; j < in.block_dims[1]; ++j)
+                for (int i = 0; i < in.block_dims[0]; ++i) {
+                    const std::int32_t s = in.block_table[in.table_index(i, j, k)];
+                    if (s < 0) {
+                        to.block_table[to.table_index(i + lo[0], j + lo[1], k + lo[2])] = s;
+                        continue;
                     }
-                    t0 = Clock::now();
-                    SmoothReport r = smooth_volume(sub, brick);
-                    rep.seconds_smooth += seconds_since(t0);
-                    if (!r.iterations.empty()) {
-                        ++rep.bricks_run;
-                        rep.largest_window_blocks = std::max(rep.largest_window_blocks, sub.block_count());
-                        const SmoothIteration& it = r.iterations.front();
-                        SmoothIteration& sum = result.record;
-                        if (result.roughness.size() < it.roughness_histogram.size())
-                            result.roughness.resize(it.roughness_histogram.size(), 0);
-                        for (std::size_t h = 0; h < it.roughness_histogram.size(); ++h)
-                            result.roughness[h] += it.roughness_histogram[h];
-                        sum.filter_points += it.filter_points;
-                        sum.band_voxels += it.band_voxels;
-                        sum.allocated_voxels += it.allocated_voxels;
-                        sum.refit_steps = std::max(sum.refit_steps, it.refit_steps);
-                        sum.refit_evaluations = std::max(sum.refit_evaluations, it.refit_evaluations);
-                        sum.mu = std::max(sum.mu, it.mu);
-                        result.volume_change += it.volume_after - it.volume_before;
-                        result.volume_slope += it.volume_slope;
-                        result.moved |= it.refit_steps > 0 || !is_neighbourhood_filter(opt.mode);
-                        result.any = true;
-                    }
-                    // (a window whose surface lies beyond it, only its band's edge in the interior, has nothing to say)
-                    if (!r.iterations.empty()) add_new(result.warnings, r.warnings);
+                    const float* src = in.block_values(s);
+                    float* dst = to.block_values(to.allocate_block(i + lo[0], j + lo[1], k + lo[2]));
+                    // a window without a surface kept the scan's narrower band: its values are distances all the
+                    // same, clamped where the result's band is wider
+                    for (int v = 0; v < kBlockVoxels; ++v) dst[v] = std::clamp(src[v], -to.background, to.background);
                 }
-                // The interior into the result: its blocks as the brick's engine left them, its tiles' signs.
-                for (int k = lo[2]; k < hi[2]; ++k)
-                    for (int j = lo[1]; j < hi[1]; ++j)
-                        for (int i = lo[0]; i < hi[0]; ++i) {
-                            const std::int32_t s = slot(sub, i, j, k);
-                            if (s < 0) {
-                                to.block_table[to.table_index(i, j, k)] = s;
-                                continue;
-                            }
-                            const float* src = sub.block_values(s);
-                            float* dst = to.block_values(to.allocate_block(i, j, k));
-                            // a window without a surface kept the scan's narrower band: its values are distances
-                            // all the same, clamped where the result's band is wider
-                            for (int n = 0; n < kBlockVoxels; ++n)
-                                dst[n] = std::clamp(src[n], -to.background, to.background);
-                        }
-                ++done;
-                detail::tick(progress, done_before + share * double(done) / total, "smooth_in_bricks");
-            }
+        detail::tick(progress, done_before + share * double(next) / total, "smooth_in_bricks");
+    };
+    runner(c, total, make, take);
+    if (next != total)
+        throw std::logic_error("smooth_in_bricks: " + std::to_string(total - next) + " bricks did not come back");
     result.record.roughness = roughness_of_histogram(result.roughness);
     result.record.seconds = seconds_since(t_pass);
     return result;
 }
 
 }  // namespace
+
+BrickOutcome run_brick(const BrickContext& c, BrickJob job) {
+    BrickOutcome o;
+    o.index = job.index;
+    const BlockWindow& w = job.window;
+    auto t0 = Clock::now();
+    Volume sub;
+    if (job.scan) {
+        if (!c.mesh || !c.query) throw InvalidInput("run_brick: a brick to scan needs the mesh and its search");
+        sub = scan_convert_window(*c.mesh, *c.query, c.wn, c.grid, w, c.scan);
+    } else {
+        sub = std::move(job.input);
+        const Grid g = window_grid(c.grid, w);
+        if (sub.grid.dims != g.dims ||
+            sub.block_table.size() != std::size_t(sub.block_dims[0]) * sub.block_dims[1] * sub.block_dims[2])
+            throw InvalidInput("run_brick: brick " + std::to_string(job.index) + "'s window does not fit its grid");
+    }
+    o.seconds_scan = seconds_since(t0);
+    const auto slot = [&](int i, int j, int k) {
+        return sub.block_table[sub.table_index(i - w.lo[0], j - w.lo[1], k - w.lo[2])];
+    };
+    // Only a window whose interior holds (or lies within the band of) a surface runs the engine.
+    bool interior_band = false;
+    for (int k = job.lo[2]; k < job.hi[2] && !interior_band; ++k)
+        for (int j = job.lo[1]; j < job.hi[1] && !interior_band; ++j)
+            for (int i = job.lo[0]; i < job.hi[0] && !interior_band; ++i) interior_band = slot(i, j, k) >= 0;
+    if (interior_band && job.reinitialise_only) {
+        t0 = Clock::now();
+        reinitialise_volume(sub, c.engine.threads);
+        o.seconds_smooth = seconds_since(t0);
+        o.ran = true;
+    } else if (interior_band) {
+        SmoothOptions brick = c.engine;
+        brick.reinitialise_input = job.reinitialise_input;
+        const std::array<int, 3> gbd{(c.grid.dims[0] + kBlockDim - 1) / kBlockDim,
+                                     (c.grid.dims[1] + kBlockDim - 1) / kBlockDim,
+                                     (c.grid.dims[2] + kBlockDim - 1) / kBlockDim};
+        for (int a = 0; a < 3; ++a) {
+            brick.window_lo[a] = job.lo[a] - w.lo[a];
+            brick.window_hi[a] = job.hi[a] - w.lo[a];
+            // the window's sides within the grid hold still: the surface runs on past them
+            brick.fixed_lo[a] = w.lo[a] > 0 ? kFixedBorder : 0;
+            brick.fixed_hi[a] = w.hi[a] < gbd[a] ? kFixedBorder : 0;
+        }
+        t0 = Clock::now();
+        SmoothReport r = smooth_volume(sub, brick);
+        o.seconds_smooth = seconds_since(t0);
+        // (a window whose surface lies beyond it, only its band's edge in the interior, has nothing to say)
+        if (!r.iterations.empty()) {
+            o.ran = true;
+            o.record = std::move(r.iterations.front());
+            o.warnings = std::move(r.warnings);
+            o.window_blocks = sub.block_count();
+        }
+    }
+    o.interior = interior_of(sub, c.grid, w, job.lo, job.hi);
+    return o;
+}
 
 int brick_halo_voxels(const SmoothOptions& opt, int iterations) {
     const double ell = opt.length_scale > 0 ? opt.length_scale : kDefaultLengthScale;
@@ -172,7 +262,7 @@ int brick_halo_voxels(const SmoothOptions& opt, int iterations) {
 Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn,
                         const ScanConvertOptions& scan, const SmoothOptions& opt, const BrickOptions& bricks,
                         BrickReport* report, SmoothReport* smooth_report, Progress* progress,
-                        const SmoothCheckpoint* checkpoint) {
+                        const SmoothCheckpoint* checkpoint, const BrickRunner* runner) {
     validate_smooth_options(opt, "smooth_in_bricks");
     if (bricks.brick_voxels < kBlockDim)
         throw InvalidInput("smooth_in_bricks: brick_voxels must be >= 8, got " + std::to_string(bricks.brick_voxels));
@@ -202,21 +292,29 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     one.refit_whole_time = true;
     one.defer_volume_shift = true;  // the volume constraint (where kept) and the roughness over the interiors
     one.final_reinitialise = false;
+    BrickContext context;
+    context.mesh = &m;
+    context.query = &q;
+    context.wn = wn;
+    context.grid = grid;
+    context.scan = scan;
+    context.engine = one;
+    const BrickRunner& run = runner && *runner ? *runner : BrickRunner(run_here);
+    rep.elsewhere = runner && *runner;
     SmoothReport sr;
     Volume cur, next;
     bool raw = false;  // cur is as the last refit left it: its band not moved, φ not reinitialised
     const auto reinitialise = [&] {
         next.reset(grid, engine::kHalfWidth);
-        run_pass(m, q, wn, grid, scan, one, brick_blocks, halo_blocks, &cur, next, rep, progress, 1.0, 0.0, true);
+        run_pass(context, run, brick_blocks, halo_blocks, &cur, next, rep, progress, 1.0, 0.0, false, true);
         cur = std::move(next);
         raw = false;
     };
     detail::begin(progress, "bricks");
     for (int it = 0; it < iterations; ++it) {
-        one.reinitialise_input = it == 0 || raw;
         next.reset(grid, engine::kHalfWidth);
-        Pass p = run_pass(m, q, wn, grid, scan, one, brick_blocks, halo_blocks, it == 0 ? nullptr : &cur, next, rep,
-                          progress, double(it) / iterations, 1.0 / iterations);
+        Pass p = run_pass(context, run, brick_blocks, halo_blocks, it == 0 ? nullptr : &cur, next, rep, progress,
+                          double(it) / iterations, 1.0 / iterations, it == 0 || raw);
         ++rep.passes;
         add_new(sr.warnings, p.warnings);
         cur = std::move(next);
@@ -256,6 +354,238 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     if (smooth_report) *smooth_report = std::move(sr);
     if (report) *report = rep;
     return cur;
+}
+
+}  // namespace normalflow
+
+// ---- Messages -------------------------------------------------------------------------------------------------
+
+namespace normalflow {
+
+namespace {
+
+// A message starts with its kind, this build's version and the sizes of the structs it copies byte for byte: a
+// message between two builds that lay them out differently is refused rather than misread.
+constexpr std::uint32_t kJob = 0x4a42464e, kOutcome = 0x4f42464e, kContext = 0x4342464e;  // "NFBJ", "NFBO", "NFBC"
+
+struct Writer {
+    std::string out;
+    template <class T>
+    void put(const T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        out.append(reinterpret_cast<const char*>(&v), sizeof(T));
+    }
+    template <class T>
+    void put_vector(const std::vector<T>& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        put(std::uint64_t(v.size()));
+        out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+    }
+    void put_string(const std::string& s) {
+        put(std::uint64_t(s.size()));
+        out.append(s);
+    }
+    void header(std::uint32_t kind) {
+        put(kind);
+        put_string(version());
+        put(std::uint32_t(sizeof(SmoothOptions)));
+        put(std::uint32_t(sizeof(ScanConvertOptions)));
+        put(std::uint32_t(sizeof(Grid)));
+    }
+    void put_volume(const Volume& v) {
+        put(v.grid);
+        put(v.background);
+        put(v.half_width);
+        put(v.block_dims);
+        put_vector(v.block_table);
+        put_vector(v.block_coords);
+        put_vector(v.values);
+    }
+};
+
+struct Reader {
+    std::string_view in;
+    std::size_t at = 0;
+    const char* what;
+    [[noreturn]] void bad(const std::string& why) const { throw InvalidInput(std::string(what) + ": " + why); }
+    void need(std::size_t n) const {
+        if (in.size() - at < n) bad("the message is truncated");
+    }
+    template <class T>
+    T get() {
+        static_assert(std::is_trivially_copyable_v<T>);
+        need(sizeof(T));
+        T v;
+        std::memcpy(&v, in.data() + at, sizeof(T));
+        at += sizeof(T);
+        return v;
+    }
+    template <class T>
+    std::vector<T> get_vector() {
+        const auto n = get<std::uint64_t>();
+        if (n > (in.size() - at) / sizeof(T)) bad("the message is truncated");
+        std::vector<T> v(n);
+        std::memcpy(v.data(), in.data() + at, n * sizeof(T));
+        at += n * sizeof(T);
+        return v;
+    }
+    std::string get_string() {
+        const auto n = get<std::uint64_t>();
+        need(n);
+        std::string s(in.substr(at, n));
+        at += n;
+        return s;
+    }
+    void header(std::uint32_t kind) {
+        if (get<std::uint32_t>() != kind) bad("not a brick message of this kind");
+        const std::string from = get_string();
+        const auto so = get<std::uint32_t>(), sc = get<std::uint32_t>(), gr = get<std::uint32_t>();
+        if (from != version() || so != sizeof(SmoothOptions) || sc != sizeof(ScanConvertOptions) || gr != sizeof(Grid))
+            bad("the message comes from normalflow " + from + ", this is normalflow " + version() +
+                " (every machine of a run must run the same build)");
+    }
+    Volume get_volume() {
+        Volume v;
+        v.grid = get<Grid>();
+        v.background = get<float>();
+        v.half_width = get<float>();
+        v.block_dims = get<std::array<int, 3>>();
+        v.block_table = get_vector<std::int32_t>();
+        v.block_coords = get_vector<std::array<int, 3>>();
+        v.values = get_vector<float>();
+        std::size_t blocks = 1;
+        for (int a = 0; a < 3; ++a) {
+            if (v.block_dims[a] < 0 || v.block_dims[a] != (v.grid.dims[a] + kBlockDim - 1) / kBlockDim)
+                bad("a volume's blocks do not fit its grid");
+            blocks *= std::size_t(v.block_dims[a]);
+        }
+        if (v.block_table.size() != blocks || v.values.size() != v.block_coords.size() * kBlockVoxels)
+            bad("a volume's blocks do not fit its grid");
+        for (std::int32_t s : v.block_table)
+            if (s >= std::int32_t(v.block_coords.size()) || s < kBlockInside) bad("a volume's block table is broken");
+        return v;
+    }
+    void end() const {
+        if (at != in.size()) bad("the message has " + std::to_string(in.size() - at) + " bytes too many");
+    }
+};
+
+}  // namespace
+
+std::string brick_message(const BrickJob& job) {
+    Writer w;
+    w.header(kJob);
+    w.put(job.index);
+    w.put(job.lo);
+    w.put(job.hi);
+    w.put(job.window);
+    w.put(std::array<bool, 3>{job.scan, job.reinitialise_only, job.reinitialise_input});
+    w.put_volume(job.input);
+    return std::move(w.out);
+}
+
+BrickJob brick_job_from_message(std::string_view message) {
+    Reader r{message, 0, "brick job"};
+    r.header(kJob);
+    BrickJob job;
+    job.index = r.get<int>();
+    job.lo = r.get<std::array<int, 3>>();
+    job.hi = r.get<std::array<int, 3>>();
+    job.window = r.get<BlockWindow>();
+    const auto flags = r.get<std::array<bool, 3>>();
+    job.scan = flags[0];
+    job.reinitialise_only = flags[1];
+    job.reinitialise_input = flags[2];
+    job.input = r.get_volume();
+    r.end();
+    for (int a = 0; a < 3; ++a)
+        if (!(job.window.lo[a] <= job.lo[a] && job.lo[a] < job.hi[a] && job.hi[a] <= job.window.hi[a]))
+            r.bad("the brick's interior is not inside its window");
+    return job;
+}
+
+std::string brick_message(const BrickOutcome& o) {
+    Writer w;
+    w.header(kOutcome);
+    w.put(o.index);
+    w.put(o.ran);
+    w.put_volume(o.interior);
+    const SmoothIteration& it = o.record;
+    w.put(it.filter_points);
+    w.put(it.band_voxels);
+    w.put(it.allocated_voxels);
+    w.put(it.refit_steps);
+    w.put(it.refit_evaluations);
+    w.put(it.mu);
+    w.put(std::array<double, 3>{it.volume_before, it.volume_after, it.volume_slope});
+    w.put_vector(it.roughness_histogram);
+    w.put(std::uint64_t(o.warnings.size()));
+    for (const std::string& s : o.warnings) w.put_string(s);
+    w.put(o.window_blocks);
+    w.put(std::array<double, 2>{o.seconds_scan, o.seconds_smooth});
+    return std::move(w.out);
+}
+
+BrickOutcome brick_outcome_from_message(std::string_view message) {
+    Reader r{message, 0, "brick outcome"};
+    r.header(kOutcome);
+    BrickOutcome o;
+    o.index = r.get<int>();
+    o.ran = r.get<bool>();
+    o.interior = r.get_volume();
+    SmoothIteration& it = o.record;
+    it.filter_points = r.get<std::size_t>();
+    it.band_voxels = r.get<std::size_t>();
+    it.allocated_voxels = r.get<std::size_t>();
+    it.refit_steps = r.get<int>();
+    it.refit_evaluations = r.get<int>();
+    it.mu = r.get<float>();
+    const auto volume = r.get<std::array<double, 3>>();
+    it.volume_before = volume[0];
+    it.volume_after = volume[1];
+    it.volume_slope = volume[2];
+    it.roughness_histogram = r.get_vector<std::uint32_t>();
+    const auto warnings = r.get<std::uint64_t>();
+    if (warnings > message.size()) r.bad("the message is truncated");
+    for (std::uint64_t i = 0; i < warnings; ++i) o.warnings.push_back(r.get_string());
+    o.window_blocks = r.get<std::size_t>();
+    const auto seconds = r.get<std::array<double, 2>>();
+    o.seconds_scan = seconds[0];
+    o.seconds_smooth = seconds[1];
+    r.end();
+    return o;
+}
+
+std::string brick_context_message(const BrickContext& c) {
+    Writer w;
+    w.header(kContext);
+    w.put(c.grid);
+    w.put(c.scan);
+    w.put(c.engine);
+    static const Mesh none;
+    const Mesh& m = c.mesh ? *c.mesh : none;
+    w.put_vector(m.positions);
+    w.put_vector(m.triangles);
+    return std::move(w.out);
+}
+
+void brick_context_from_message(std::string_view message, BrickContext& c, Mesh& mesh) {
+    Reader r{message, 0, "brick context"};
+    r.header(kContext);
+    c.grid = r.get<Grid>();
+    c.scan = r.get<ScanConvertOptions>();
+    c.engine = r.get<SmoothOptions>();
+    mesh = Mesh{};
+    mesh.positions = r.get_vector<Vec3f>();
+    mesh.triangles = r.get_vector<Tri>();
+    r.end();
+    for (const Tri& t : mesh.triangles)
+        for (std::uint32_t v : t)
+            if (v >= mesh.positions.size()) r.bad("a triangle names a vertex the mesh does not have");
+    validate_smooth_options(c.engine, "brick context");
+    c.mesh = &mesh;
+    c.query = nullptr;
+    c.wn = nullptr;
 }
 
 }  // namespace normalflow

@@ -7,7 +7,9 @@
 /// brick whose halo covers what its interior depends on holds, in its interior, what the whole run holds there.
 
 #include <cstddef>
+#include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/mesh.h"
@@ -42,8 +44,70 @@ struct BrickReport {
     std::size_t largest_window_blocks = 0;  ///< the most allocated blocks one brick's window held in the engine
     double seconds_scan = 0;                ///< wall seconds of the windows' scan conversions
     double seconds_smooth = 0;              ///< wall seconds of the engine over the bricks (reinitialisation too)
+                                            ///< (summed over the bricks, where ever they ran)
+    bool elsewhere = false;                 ///< the bricks ran where a BrickRunner sent them
     int total() const { return bricks[0] * bricks[1] * bricks[2]; }
 };
+
+/// What every brick of a run reads: the grid, the options, and (for the first iteration's scan of its window) the
+/// mesh with its closest-triangle search and winding number.
+struct BrickContext {
+    const Mesh* mesh = nullptr;
+    const ClosestTriangleQuery* query = nullptr;
+    const WindingNumber* wn = nullptr;  ///< null only with scan.shell_thickness > 0
+    Grid grid;                          ///< scan_grid(*mesh, scan)
+    ScanConvertOptions scan;
+    SmoothOptions engine;  ///< one main iteration's options, as every brick runs them (its window's fields aside)
+};
+
+/// One brick of a pass over the bricks: its interior and window, and what the window starts from.
+struct BrickJob {
+    int index = 0;                   ///< its place in the pass (bricks in order of z, then y, then x)
+    std::array<int, 3> lo{0, 0, 0};  ///< the interior, blocks of the grid
+    std::array<int, 3> hi{0, 0, 0};
+    BlockWindow window;              ///< the interior and its halo, blocks of the grid
+    bool scan = false;               ///< the window is scan-converted (the first iteration); else `input`
+    bool reinitialise_only = false;  ///< the window is only reinitialised (reinitialise_volume), as a run ends
+    bool reinitialise_input = true;  ///< SmoothOptions::reinitialise_input for the engine's run
+    Volume input;                    ///< the window of the last iteration's result (window_grid), unless scan
+};
+
+/// What a brick made: its interior as its engine left it.
+struct BrickOutcome {
+    int index = 0;
+    bool ran = false;        ///< its engine ran (the interior near a surface); `record` and `warnings` are its
+    Volume interior;         ///< on window_grid(grid, {lo, hi}): the interior's blocks and tile signs
+    SmoothIteration record;  ///< the engine's iteration (the fields smooth_in_bricks sums)
+    std::vector<std::string> warnings;
+    std::size_t window_blocks = 0;  ///< blocks the window held in the engine
+    double seconds_scan = 0;        ///< wall seconds of the window's scan conversion
+    double seconds_smooth = 0;      ///< wall seconds of its engine (or reinitialisation)
+};
+
+/// One brick's work, where ever it runs: the same job gives the same outcome, bit for bit, on any machine running
+/// the same build, with any number of threads.
+BrickOutcome run_brick(const BrickContext& context, BrickJob job);
+
+/// Runs the bricks of one pass somewhere (smooth_in_bricks's default: one after the other, here): make(i) builds
+/// brick i's job, for i in [0, count), when the runner is ready for it (a runner that holds one job at a time
+/// holds one window); take() puts the outcomes back, in order of their index (what the pass sums does not depend
+/// on where or when a brick ran).
+using BrickRunner = std::function<void(const BrickContext& context, int count, const std::function<BrickJob(int)>& make,
+                                       const std::function<void(BrickOutcome&&)>& take)>;
+
+/// The messages that carry a brick elsewhere (Python's Dask bricks): a job, an outcome, and the context (the mesh,
+/// the grid and the options; a search and winding number are the receiver's to build). Each starts with this
+/// build's version and its options' sizes: a message from another build is refused (InvalidInput), as is a
+/// truncated one.
+std::string brick_message(const BrickJob& job);
+std::string brick_message(const BrickOutcome& outcome);
+BrickJob brick_job_from_message(std::string_view message);
+BrickOutcome brick_outcome_from_message(std::string_view message);
+/// The context's mesh (positions and triangles only), grid and options; its search pointers are not carried.
+std::string brick_context_message(const BrickContext& context);
+/// Fills `context` (but its search pointers) from a message, the mesh into `mesh` (context.mesh = &mesh). The
+/// receiver builds the search, and the winding number where context.scan.shell_thickness is 0.
+void brick_context_from_message(std::string_view message, BrickContext& context, Mesh& mesh);
 
 /// scan_convert(m, q, scan) followed by smooth_volume(·, opt), brick by brick. The grid (scan_grid) is cut into
 /// bricks of bricks.brick_voxels (whole blocks, on multiples of the filters' sample stride); the run goes one main
@@ -65,10 +129,12 @@ struct BrickReport {
 /// \param smooth_report receives one record per iteration over the whole (sums over the bricks; the refit's
 ///        steps and evaluations the most of any brick) and the stops decided.
 /// \param checkpoint asked after each iteration but the last with the volume reinitialised (SmoothCheckpoint).
+/// \param runner where the bricks run (null: here, one after the other); the result does not depend on it.
 /// \throw InvalidInput for bad options; what scan_convert_window and smooth_volume throw; Cancelled via progress.
 Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn,
                         const ScanConvertOptions& scan, const SmoothOptions& opt, const BrickOptions& bricks,
                         BrickReport* report = nullptr, SmoothReport* smooth_report = nullptr,
-                        Progress* progress = nullptr, const SmoothCheckpoint* checkpoint = nullptr);
+                        Progress* progress = nullptr, const SmoothCheckpoint* checkpoint = nullptr,
+                        const BrickRunner* runner = nullptr);
 
 }  // namespace normalflow

@@ -76,25 +76,79 @@ def image_to_volume(values, spacing=(1.0, 1.0, 1.0), origin=(0.0, 0.0, 0.0), iso
                                float(voxel_size))
 
 
-def smooth(mesh, faces=None, *, progress=None, **options):
+_brick_workers = {}  # in a worker process: the BrickWorker of the run whose bricks it last ran
+
+
+def _run_brick(run, context, job):
+    """One brick of a bricked run, as a Dask task: the run's BrickWorker (its mesh's search built once per worker
+    process) runs the job's message and returns the outcome's."""
+    worker = _brick_workers.get(run)
+    if worker is None:
+        _brick_workers.clear()  # one run at a time per worker process: the last one's search goes
+        worker = _brick_workers[run] = _nf.BrickWorker(context)
+    return worker.run(job)
+
+
+class _DaskBricks:
+    """The bricks of a bricked run as tasks of a dask.distributed client: the run's context (its mesh, grid and
+    options) goes to every worker once, each pass's bricks are submitted as their windows are cut (at most twice as
+    many in flight as there are worker threads, so that the windows do not all wait in memory at once), and their
+    outcomes are handed back in order. Dask is the scheduler; every worker must run this build of normalflow."""
+
+    def __init__(self, client):
+        self._client = client
+        self._context = None
+        self._scattered = None
+        self._run = None
+
+    def __call__(self, context, count, make, take):
+        if self._context != context:
+            import uuid
+            self._context = context
+            self._run = uuid.uuid4().hex
+            self._scattered = self._client.scatter(context, broadcast=True, hash=False)
+        threads = sum(w.get("nthreads", 1) for w in self._client.scheduler_info()["workers"].values())
+        limit = 2 * max(1, threads)
+        futures = {}
+        submitted = 0
+        for taken in range(count):
+            while submitted < count and submitted - taken < limit:
+                job = self._client.scatter(make(submitted), hash=False)  # the task runs where its window went
+                futures[submitted] = self._client.submit(_run_brick, self._run, self._scattered, job, pure=False)
+                submitted += 1
+            take(futures.pop(taken).result())
+
+
+def smooth(mesh, faces=None, *, progress=None, client=None, **options):
     """The whole pipeline (normalflow smooth): scan conversion, the normal map filtered on the surface and the
     volume refitted to it, then the result handed back. ``mesh`` is a Mesh, vertices with ``faces``, or a Volume
     (then ``volume=True`` returns the smoothed Volume instead of its surface).
 
+    ``client``: a ``dask.distributed`` Client. A run in bricks (``brick_size``, or a volume over ``max_memory``)
+    then runs its bricks as tasks on the cluster's workers, each holding the bricks it runs; this process holds
+    the assembled volume and does the rest. The result is the one of the same run without ``client``, bit for bit.
+    A run that fits whole runs here (its report's warnings say so).
+
     Returns (Mesh or Volume, report dict)."""
     if isinstance(mesh, Volume):
+        if client is not None:
+            raise TypeError("client= runs the bricks of a mesh's run; a Volume is smoothed here")
         want_volume = bool(options.pop("volume", False))
         out, report = _nf.smooth_volume(mesh, options, progress, not want_volume)
     else:
-        out, report = _nf.smooth(_mesh(mesh, faces), options, progress)
+        out, report = _nf.smooth(_mesh(mesh, faces), options, progress, _bricks(client))
     return out, _json.loads(report)
 
 
-def remesh(mesh, faces=None, *, progress=None, **options):
+def _bricks(client):
+    return None if client is None else _DaskBricks(client)
+
+
+def remesh(mesh, faces=None, *, progress=None, client=None, **options):
     """A closed manifold re-meshing of any mesh through its volume (normalflow remesh): the extraction's vertices
     moved onto the input's creases and corners (sharpen=False keeps them on the grid), decimated with target_faces
-    or max_error. Returns (Mesh, report dict)."""
-    out, report = _nf.remesh(_mesh(mesh, faces), options, progress)
+    or max_error. ``client`` as for :func:`smooth` (a remesh whose engine runs). Returns (Mesh, report dict)."""
+    out, report = _nf.remesh(_mesh(mesh, faces), options, progress, _bricks(client))
     return out, _json.loads(report)
 
 

@@ -246,6 +246,34 @@ std::string keyword_help(Command c) {
 
 py::tuple mesh_and_report(Mesh&& m, const Json& j) { return py::make_tuple(py::cast(std::move(m)), j.dump()); }
 
+std::string_view bytes_view(const py::bytes& b) {
+    return {PyBytes_AS_STRING(b.ptr()), std::size_t(PyBytes_GET_SIZE(b.ptr()))};
+}
+
+/// A Python runner(context, count, make, take) (normalflow's _DaskBricks) as the pipeline's BrickMessageRunner: it is
+/// called with the GIL, make and take run the C++ side without it.
+BrickMessageRunner brick_runner(const py::object& runner) {
+    if (runner.is_none()) return {};
+    return [runner](const std::string& context, int count, const std::function<std::string(int)>& make,
+                    const std::function<void(const std::string&)>& take) {
+        py::gil_scoped_acquire gil;
+        const py::cpp_function py_make([&make](int i) {
+            std::string job;
+            {
+                py::gil_scoped_release release;
+                job = make(i);
+            }
+            return py::bytes(job);
+        });
+        const py::cpp_function py_take([&take](const py::bytes& outcome) {
+            const std::string message(bytes_view(outcome));
+            py::gil_scoped_release release;
+            take(message);
+        });
+        runner(py::bytes(context), count, py_make, py_take);
+    };
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_normalflow, m) {
@@ -428,17 +456,36 @@ PYBIND11_MODULE(_normalflow, m) {
 
     m.def(
         "smooth",
-        [](const Mesh& mesh, const py::dict& keywords, py::object callback) {
+        [](const Mesh& mesh, const py::dict& keywords, py::object callback, py::object bricks) {
             const RunOptions run = run_options(Command::Smooth, keywords);
             const PipelineOptions opt = pipeline_options(run, Command::Smooth);
             PyProgress progress(std::move(callback));
+            const BrickMessageRunner runner = brick_runner(bricks);
             PipelineResult r = released(progress, [&] {
                 validate(opt);
-                return smooth_mesh(mesh, opt, &progress);
+                return smooth_mesh(mesh, opt, &progress, runner ? &runner : nullptr);
             });
             return mesh_and_report(std::move(r.mesh), run_report_json(Command::Smooth, run, r.report));
         },
-        py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
+        py::arg("mesh"), py::arg("keywords"), py::arg("progress"), py::arg("bricks") = py::none());
+
+    py::class_<BrickWorker>(m, "BrickWorker",
+                            "What a worker of a bricked run does with its bricks: built from the run's context "
+                            "message, run(job) returns the brick's outcome (both bytes)")
+        .def(py::init([](const py::bytes& context) { return std::make_unique<BrickWorker>(bytes_view(context)); }),
+             py::arg("context"))
+        .def(
+            "run",
+            [](const BrickWorker& w, const py::bytes& job) {
+                const std::string_view message = bytes_view(job);
+                std::string outcome;
+                {
+                    py::gil_scoped_release release;
+                    outcome = w.run(message);
+                }
+                return py::bytes(outcome);
+            },
+            py::arg("job"));
 
     m.def(
         "smooth_volume",
@@ -465,17 +512,18 @@ PYBIND11_MODULE(_normalflow, m) {
 
     m.def(
         "remesh",
-        [](const Mesh& mesh, const py::dict& keywords, py::object callback) {
+        [](const Mesh& mesh, const py::dict& keywords, py::object callback, py::object bricks) {
             const RunOptions run = run_options(Command::Remesh, keywords);
             const PipelineOptions opt = pipeline_options(run, Command::Remesh);
             PyProgress progress(std::move(callback));
+            const BrickMessageRunner runner = brick_runner(bricks);
             PipelineResult r = released(progress, [&] {
                 validate(opt);
-                return smooth_mesh(mesh, opt, &progress);
+                return smooth_mesh(mesh, opt, &progress, runner ? &runner : nullptr);
             });
             return mesh_and_report(std::move(r.mesh), run_report_json(Command::Remesh, run, r.report));
         },
-        py::arg("mesh"), py::arg("keywords"), py::arg("progress"));
+        py::arg("mesh"), py::arg("keywords"), py::arg("progress"), py::arg("bricks") = py::none());
 
     m.def(
         "voxelize",

@@ -6,6 +6,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "../sdf/sdf_test_meshes.h"
 #include "band/layout.h"
@@ -153,6 +157,114 @@ TEST(Bricks, ACheckpointStopsAfterTheFirstPassAndThreadsChangeNothing) {
     const Volume c = smooth_in_bricks(m, *q, &wn, scan, opt, b);
     EXPECT_EQ(a.block_table, c.block_table);
     EXPECT_EQ(a.values, c.values);
+}
+
+// A runner that carries every brick as messages (as Python's Dask bricks do), building all the jobs of a pass before
+// running any, and running them last to first: the result is the one run here, bit for bit, and the context goes
+// once per run. A runner that hands an outcome back out of order, or forgets one, is caught.
+TEST(Bricks, BricksCarriedAsMessagesGiveTheRunHereBitForBit) {
+    const Mesh m = noisy_scene(0.03);
+    const ScanConvertOptions scan = scan_at(40);
+    const SmoothOptions opt = bilateral(2, 1.5f);
+    const BrickOptions b{.brick_voxels = 16};
+    const auto q = make_bvh_query(m);
+    const WindingNumber wn(m);
+    BrickReport here_report;
+    const Volume here = smooth_in_bricks(m, *q, &wn, scan, opt, b, &here_report);
+    EXPECT_FALSE(here_report.elsewhere);
+
+    std::vector<std::string> contexts;
+    const BrickRunner messages = [&](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+                                     const std::function<void(BrickOutcome &&)>& take) {
+        const std::string context = brick_context_message(c);
+        if (contexts.empty() || contexts.back() != context) contexts.push_back(context);
+        std::vector<std::string> jobs;
+        for (int i = 0; i < count; ++i) jobs.push_back(brick_message(make(i)));
+        // a worker: the context's mesh and its search of its own
+        BrickContext there;
+        Mesh mesh;
+        brick_context_from_message(context, there, mesh);
+        const auto query = make_bvh_query(mesh);
+        const WindingNumber winding(mesh);
+        there.query = query.get();
+        there.wn = &winding;
+        std::vector<std::string> outcomes(jobs.size());
+        for (int i = count - 1; i >= 0; --i)
+            outcomes[i] = brick_message(run_brick(there, brick_job_from_message(jobs[i])));
+        for (const std::string& o : outcomes) take(brick_outcome_from_message(o));
+    };
+    BrickReport rep;
+    SmoothReport sr;
+    const Volume there = smooth_in_bricks(m, *q, &wn, scan, opt, b, &rep, &sr, nullptr, nullptr, &messages);
+    EXPECT_TRUE(rep.elsewhere);
+    EXPECT_EQ(rep.passes, here_report.passes);
+    EXPECT_EQ(rep.bricks_run, here_report.bricks_run);
+    EXPECT_GT(rep.total(), 8);
+    EXPECT_EQ(contexts.size(), 1u);
+    EXPECT_EQ(there.block_table, here.block_table);
+    EXPECT_EQ(there.block_coords, here.block_coords);
+    EXPECT_EQ(there.values, here.values);
+
+    const BrickRunner reversed = [](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+                                    const std::function<void(BrickOutcome &&)>& take) {
+        for (int i = count - 1; i >= 0; --i) take(run_brick(c, make(i)));
+    };
+    EXPECT_THROW(smooth_in_bricks(m, *q, &wn, scan, opt, b, nullptr, nullptr, nullptr, nullptr, &reversed),
+                 std::logic_error);
+    const BrickRunner forgetful = [](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+                                     const std::function<void(BrickOutcome &&)>& take) {
+        for (int i = 0; i + 1 < count; ++i) take(run_brick(c, make(i)));
+    };
+    EXPECT_THROW(smooth_in_bricks(m, *q, &wn, scan, opt, b, nullptr, nullptr, nullptr, nullptr, &forgetful),
+                 std::logic_error);
+}
+
+// A message cut short, of another kind, or with a byte too many is refused with a line that says so; a message names
+// the build it comes from.
+TEST(Bricks, BadMessagesAreRefused) {
+    const Mesh m = noisy_scene(0.0);
+    BrickContext c;
+    c.mesh = &m;
+    c.grid = scan_grid(m, scan_at(32));
+    c.engine = bilateral(1, 1.5f);
+    const std::string context = brick_context_message(c);
+    BrickContext back;
+    Mesh mesh;
+    brick_context_from_message(context, back, mesh);
+    EXPECT_EQ(mesh.positions.size(), m.positions.size());
+    EXPECT_EQ(mesh.triangles, m.triangles);
+    EXPECT_EQ(back.grid.dims, c.grid.dims);
+    EXPECT_EQ(back.engine.length_scale, 1.5f);
+    EXPECT_THROW(brick_context_from_message(context.substr(0, context.size() - 1), back, mesh), InvalidInput);
+    EXPECT_THROW(brick_context_from_message(context + "x", back, mesh), InvalidInput);
+
+    BrickJob job;
+    job.index = 3;
+    job.lo = {2, 2, 2};
+    job.hi = {4, 4, 4};
+    job.window = BlockWindow{{0, 0, 0}, {6, 6, 6}};
+    job.input = Volume(window_grid(c.grid, job.window), 8.0f);
+    job.input.set(1, 2, 3, 0.25f);
+    const std::string message = brick_message(job);
+    const BrickJob read = brick_job_from_message(message);
+    EXPECT_EQ(read.index, 3);
+    EXPECT_EQ(read.input.values, job.input.values);
+    EXPECT_EQ(read.input.block_table, job.input.block_table);
+    try {
+        brick_job_from_message(message.substr(0, message.size() / 2));
+        ADD_FAILURE() << "a truncated job was read";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+    }
+    EXPECT_THROW(brick_outcome_from_message(message), InvalidInput);  // a job is not an outcome
+    std::string other = message;
+    other[4 + 8] ^= 1;  // the version string's first character (after the kind and its length): another build
+    try {
+        brick_job_from_message(other);
+        ADD_FAILURE() << "a job of another build was read";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find("same build"), std::string::npos) << e.what();
+    }
 }
 
 TEST(Bricks, BadOptionsAreRefused) {

@@ -38,3 +38,28 @@ def test_a_local_cluster_smooths_files_as_a_loop_does(data, tmp_path):
         remote = nf.read_mesh(tmp_path / f"{p.stem}_out.ply")
         assert r["triangles"] == len(local.faces)
         np.testing.assert_array_equal(remote.vertices, local.vertices)
+
+
+def test_a_bricked_run_on_a_local_cluster_is_the_run_here_bit_for_bit(data):
+    """smooth(..., client=) runs the bricks as tasks on the workers, each worker process building the mesh's search
+    once; the result is the same bricked run made here, vertex for vertex."""
+    mesh = nf.read_mesh(data / "pairs_gnf" / "fandisk_n0.3.ply")
+    options = {"resolution": 80, "brick_size": 32, "iterations": 2, "threads": 1, "connectivity": "remesh"}
+    here, here_report = nf.smooth(mesh, **options)
+    assert here_report["bricks"]["ran"] == "here"
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        there, report = nf.smooth(mesh, client=client, **options)
+        ran = client.run(lambda: list(__import__("normalflow")._brick_workers))
+        # a run that fits whole runs here, and says so
+        whole, whole_report = nf.smooth(mesh, client=client, resolution=48, threads=1)
+    assert report["bricks"]["ran"] == "elsewhere"
+    assert report["bricks"]["iterations"] == here_report["bricks"]["iterations"] == 2
+    assert report["bricks"]["bricks_run"] == here_report["bricks"]["bricks_run"] > 8
+    assert len(ran) == 2 and any(len(r) == 1 for r in ran.values()), ran  # the workers ran this run's bricks
+    np.testing.assert_array_equal(there.vertices, here.vertices)
+    np.testing.assert_array_equal(there.faces, here.faces)
+    assert "bricks" not in whole_report
+    assert any("not in bricks on the workers" in w for w in whole_report["warnings"])
+    with pytest.raises(TypeError, match="Volume"):
+        nf.smooth(nf.voxelize(mesh, resolution=32)[0], client=object())
