@@ -5,9 +5,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <deque>
+#include <future>
 #include <numeric>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <type_traits>
 
 #include "band/layout.h"
@@ -86,6 +89,27 @@ Volume interior_of(const Volume& in, const Grid& grid, const BlockWindow& w, con
 void run_here(const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
               const std::function<void(BrickOutcome&&)>& take) {
     for (int i = 0; i < count; ++i) take(run_brick(c, make(i)));
+}
+
+// The bricks `at_once` at a time on threads of their own: jobs made and outcomes taken on the calling thread, in
+// order, the engine's threads shared out among the bricks.
+BrickRunner run_on_threads(int at_once) {
+    return [at_once](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+                     const std::function<void(BrickOutcome &&)>& take) {
+        BrickContext each = c;
+        const int threads =
+            c.engine.threads > 0 ? c.engine.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+        each.engine.threads = std::max(1, threads / at_once);
+        std::deque<std::future<BrickOutcome>> running;
+        int made = 0;
+        for (int taken = 0; taken < count; ++taken) {
+            while (made < count && made - taken < at_once)
+                running.push_back(std::async(std::launch::async, run_brick, std::cref(each), make(made++)));
+            BrickOutcome o = running.front().get();  // (a brick that threw: the others finish as running goes)
+            running.pop_front();
+            take(std::move(o));
+        }
+    };
 }
 
 // One main iteration over the bricks: each brick's window, scan-converted (the first iteration) or copied from the
@@ -299,7 +323,11 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     context.grid = grid;
     context.scan = scan;
     context.engine = one;
-    const BrickRunner& run = runner && *runner ? *runner : BrickRunner(run_here);
+    if (bricks.concurrent < 1)
+        throw InvalidInput("smooth_in_bricks: concurrent must be >= 1, got " + std::to_string(bricks.concurrent));
+    const BrickRunner& run = runner && *runner       ? *runner
+                             : bricks.concurrent > 1 ? run_on_threads(bricks.concurrent)
+                                                     : BrickRunner(run_here);
     rep.elsewhere = runner && *runner;
     SmoothReport sr;
     Volume cur, next;

@@ -161,7 +161,8 @@ TEST(Bricks, ACheckpointStopsAfterTheFirstPassAndThreadsChangeNothing) {
 
 // A runner that carries every brick as messages (as Python's Dask bricks do), building all the jobs of a pass before
 // running any, and running them last to first: the result is the one run here, bit for bit, and the context goes
-// once per run. A runner that hands an outcome back out of order, or forgets one, is caught.
+// once per run; so is a run of three bricks at once on threads. A runner that hands an outcome back out of order, or
+// forgets one, is caught.
 TEST(Bricks, BricksCarriedAsMessagesGiveTheRunHereBitForBit) {
     const Mesh m = noisy_scene(0.03);
     const ScanConvertOptions scan = scan_at(40);
@@ -204,6 +205,15 @@ TEST(Bricks, BricksCarriedAsMessagesGiveTheRunHereBitForBit) {
     EXPECT_EQ(there.block_table, here.block_table);
     EXPECT_EQ(there.block_coords, here.block_coords);
     EXPECT_EQ(there.values, here.values);
+
+    // three bricks at once on threads of their own: the same again
+    BrickOptions at_once = b;
+    at_once.concurrent = 3;
+    const Volume threads = smooth_in_bricks(m, *q, &wn, scan, opt, at_once);
+    EXPECT_EQ(threads.block_coords, here.block_coords);
+    EXPECT_EQ(threads.values, here.values);
+    at_once.concurrent = 0;
+    EXPECT_THROW(smooth_in_bricks(m, *q, &wn, scan, opt, at_once), InvalidInput);
 
     const BrickRunner reversed = [](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
                                     const std::function<void(BrickOutcome &&)>& take) {
