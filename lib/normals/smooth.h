@@ -104,11 +104,12 @@ struct SmoothOptions {
         ///< stage, D doubled) or a first one that already raises D is undone, and the rest of the
         ///< refit time starts again in super steps from there (up to twice), then in explicit steps. 0: the explicit steps of refit_dt (the default before version 0.2).
     bool refit_whole_time = false;  ///< Bilateral, Guided, TotalVariation with refit_super_steps > 0: keep every super
-        ///< step that stays finite, whatever D does (no patient stop, no undoing a super step that raised D or
-        ///< doubled it, no restart in explicit steps for one). For work done brick by brick (smooth_in_bricks),
-        ///< where D is a window's, not the whole surface's, and a window's border alone can raise it; the whole
-        ///< run keeps every super step wherever D falls to the end, as on fandisk_n0.3 at 256 and 512 and most
-        ///< of the study's pairs (docs/history/benchmarks-2026.md, "Bricks").
+        ///< step that stays finite and does not run away (D doubled), whatever else D does (no patient stop, no
+        ///< undoing a super step that raised D). For work done brick by brick (smooth_in_bricks), where D is a
+        ///< window's, not the whole surface's, and a window's border alone can raise it; the whole run keeps every
+        ///< super step wherever D falls to the end, as on fandisk_n0.3 at 256 and 512 and most of the study's
+        ///< pairs. A super step that runs away is undone and the time restarted as in the whole run: kept, it
+        ///< left a pit 4 voxels deep in fandisk_n0.3 at 128 (docs/history/benchmarks-2026.md, "Bricks").
     /// For work done brick by brick (smooth_in_bricks): with preserve_volume, measure the volume before and after
     /// each refit over the blocks window_lo <= (bi, bj, bk) < window_hi only (SmoothIteration::volume_before, ...)
     /// and leave the shift that restores it to the caller, who sums the bricks' measures; and count the filters'

@@ -303,7 +303,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         const double d = rkl2_stage(c, phi, nullptr, phi, m0, 0.0, 0.0, k.mut[1] * tau, 0.0, *ring[0], nonfinite);
         ++c.record().refit_evaluations;
         ds.push_back(d);
-        if (step > 0 && d > 2.0 * best && !c.opt.refit_whole_time) {  // the last super step ran away: undo it
+        if (step > 0 && d > 2.0 * best) {  // the last super step ran away: undo it
             undo_last();
             runaway = true;
             break;
@@ -348,7 +348,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
     if (!stopped && !runaway) {
         d_end = refit_energy(c);
         ds.push_back(d_end);
-        if (kept > 0 && d_end > 2.0 * best && !c.opt.refit_whole_time) {  // the last super step ran away: undo it
+        if (kept > 0 && d_end > 2.0 * best) {  // the last super step ran away: undo it
             undo_last();
             runaway = true;
         } else if (kept > 0 && !(d_end <= prev) && !c.opt.refit_whole_time) {  // it raised D: undo it, as the
