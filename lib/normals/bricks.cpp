@@ -420,6 +420,26 @@ struct Writer {
         put(std::uint32_t(sizeof(ScanConvertOptions)));
         put(std::uint32_t(sizeof(Grid)));
     }
+    // field(): the same name as Reader's, so that one list of a message's fields (message_fields) serves both
+    template <class T>
+    void field(const T& v) {
+        if constexpr (std::is_same_v<T, Volume>)
+            put_volume(v);
+        else if constexpr (std::is_same_v<T, std::string>)
+            put_string(v);
+        else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+            put(std::uint64_t(v.size()));
+            for (const std::string& x : v) put_string(x);
+        } else if constexpr (requires {
+                                 v.data();
+                                 v.size();
+                                 typename T::value_type;
+                             } &&
+                             !std::is_trivially_copyable_v<T>)
+            put_vector(v);
+        else
+            put(v);
+    }
     void put_volume(const Volume& v) {
         put(v.grid);
         put(v.background);
@@ -472,6 +492,27 @@ struct Reader {
             bad("the message comes from normalflow " + from + ", this is normalflow " + version() +
                 " (every machine of a run must run the same build)");
     }
+    template <class T>
+    void field(T& v) {
+        if constexpr (std::is_same_v<T, Volume>)
+            v = get_volume();
+        else if constexpr (std::is_same_v<T, std::string>)
+            v = get_string();
+        else if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+            const auto n = get<std::uint64_t>();
+            if (n > in.size() - at) bad("the message is truncated");
+            v.clear();
+            for (std::uint64_t i = 0; i < n; ++i) v.push_back(get_string());
+        } else if constexpr (requires {
+                                 v.data();
+                                 v.size();
+                                 typename T::value_type;
+                             } &&
+                             !std::is_trivially_copyable_v<T>)
+            v = get_vector<typename T::value_type>();
+        else
+            v = get<T>();
+    }
     Volume get_volume() {
         Volume v;
         v.grid = get<Grid>();
@@ -500,15 +541,45 @@ struct Reader {
 
 }  // namespace
 
+// A job's and an outcome's fields, in the order their messages hold them: written (Writer) or read (Reader) alike.
+template <class IO, class Job>
+void job_fields(IO& io, Job& job) {
+    io.field(job.index);
+    io.field(job.lo);
+    io.field(job.hi);
+    io.field(job.window);
+    io.field(job.scan);
+    io.field(job.reinitialise_only);
+    io.field(job.reinitialise_input);
+    io.field(job.input);
+}
+
+template <class IO, class Outcome>
+void outcome_fields(IO& io, Outcome& o) {
+    io.field(o.index);
+    io.field(o.ran);
+    io.field(o.interior);
+    auto& it = o.record;  // the fields smooth_in_bricks sums
+    io.field(it.filter_points);
+    io.field(it.band_voxels);
+    io.field(it.allocated_voxels);
+    io.field(it.refit_steps);
+    io.field(it.refit_evaluations);
+    io.field(it.mu);
+    io.field(it.volume_before);
+    io.field(it.volume_after);
+    io.field(it.volume_slope);
+    io.field(it.roughness_histogram);
+    io.field(o.warnings);
+    io.field(o.window_blocks);
+    io.field(o.seconds_scan);
+    io.field(o.seconds_smooth);
+}
+
 std::string brick_message(const BrickJob& job) {
     Writer w;
     w.header(kJob);
-    w.put(job.index);
-    w.put(job.lo);
-    w.put(job.hi);
-    w.put(job.window);
-    w.put(std::array<bool, 3>{job.scan, job.reinitialise_only, job.reinitialise_input});
-    w.put_volume(job.input);
+    job_fields(w, job);
     return std::move(w.out);
 }
 
@@ -516,15 +587,7 @@ BrickJob brick_job_from_message(std::string_view message) {
     Reader r{message, 0, "brick job"};
     r.header(kJob);
     BrickJob job;
-    job.index = r.get<int>();
-    job.lo = r.get<std::array<int, 3>>();
-    job.hi = r.get<std::array<int, 3>>();
-    job.window = r.get<BlockWindow>();
-    const auto flags = r.get<std::array<bool, 3>>();
-    job.scan = flags[0];
-    job.reinitialise_only = flags[1];
-    job.reinitialise_input = flags[2];
-    job.input = r.get_volume();
+    job_fields(r, job);
     r.end();
     for (int a = 0; a < 3; ++a)
         if (!(job.window.lo[a] <= job.lo[a] && job.lo[a] < job.hi[a] && job.hi[a] <= job.window.hi[a]))
@@ -535,22 +598,7 @@ BrickJob brick_job_from_message(std::string_view message) {
 std::string brick_message(const BrickOutcome& o) {
     Writer w;
     w.header(kOutcome);
-    w.put(o.index);
-    w.put(o.ran);
-    w.put_volume(o.interior);
-    const SmoothIteration& it = o.record;
-    w.put(it.filter_points);
-    w.put(it.band_voxels);
-    w.put(it.allocated_voxels);
-    w.put(it.refit_steps);
-    w.put(it.refit_evaluations);
-    w.put(it.mu);
-    w.put(std::array<double, 3>{it.volume_before, it.volume_after, it.volume_slope});
-    w.put_vector(it.roughness_histogram);
-    w.put(std::uint64_t(o.warnings.size()));
-    for (const std::string& s : o.warnings) w.put_string(s);
-    w.put(o.window_blocks);
-    w.put(std::array<double, 2>{o.seconds_scan, o.seconds_smooth});
+    outcome_fields(w, o);
     return std::move(w.out);
 }
 
@@ -558,28 +606,7 @@ BrickOutcome brick_outcome_from_message(std::string_view message) {
     Reader r{message, 0, "brick outcome"};
     r.header(kOutcome);
     BrickOutcome o;
-    o.index = r.get<int>();
-    o.ran = r.get<bool>();
-    o.interior = r.get_volume();
-    SmoothIteration& it = o.record;
-    it.filter_points = r.get<std::size_t>();
-    it.band_voxels = r.get<std::size_t>();
-    it.allocated_voxels = r.get<std::size_t>();
-    it.refit_steps = r.get<int>();
-    it.refit_evaluations = r.get<int>();
-    it.mu = r.get<float>();
-    const auto volume = r.get<std::array<double, 3>>();
-    it.volume_before = volume[0];
-    it.volume_after = volume[1];
-    it.volume_slope = volume[2];
-    it.roughness_histogram = r.get_vector<std::uint32_t>();
-    const auto warnings = r.get<std::uint64_t>();
-    if (warnings > message.size()) r.bad("the message is truncated");
-    for (std::uint64_t i = 0; i < warnings; ++i) o.warnings.push_back(r.get_string());
-    o.window_blocks = r.get<std::size_t>();
-    const auto seconds = r.get<std::array<double, 2>>();
-    o.seconds_scan = seconds[0];
-    o.seconds_smooth = seconds[1];
+    outcome_fields(r, o);
     r.end();
     return o;
 }
