@@ -63,3 +63,12 @@ def test_a_bricked_run_on_a_local_cluster_is_the_run_here_bit_for_bit(data):
     assert any("not in bricks on the workers" in w for w in whole_report["warnings"])
     with pytest.raises(TypeError, match="Volume"):
         nf.smooth(nf.voxelize(mesh, resolution=32)[0], client=object())
+
+
+def test_a_worker_refuses_a_message_it_cannot_read():
+    """What a worker is sent is checked: a context or job that is not a message of this build is refused with a line
+    that says which, not misread."""
+    with pytest.raises(nf.InvalidInput, match="brick context"):
+        nf._normalflow.BrickWorker(b"")
+    with pytest.raises(nf.InvalidInput, match="brick context"):
+        nf._normalflow.BrickWorker(b"\x00" + b"NFBC" + b"\x00" * 64)
