@@ -187,6 +187,7 @@ Json to_json(const PipelineReport& r) {
                             .set("largest_window_blocks", b.largest_window_blocks)
                             .set("seconds_scan", b.seconds_scan)
                             .set("seconds_smooth", b.seconds_smooth)
+                            .set("refit_passes_redone", b.refit_passes_redone)
                             .set("ran", b.elsewhere ? "elsewhere" : "here"));
     }
     if (r.smoothed || r.noise > 0) j.set("noise", r.noise);

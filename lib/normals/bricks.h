@@ -51,6 +51,8 @@ struct BrickReport {
     double seconds_smooth = 0;              ///< wall seconds of the engine over the bricks (reinitialisation too)
                                             ///< (summed over the bricks, where ever they ran)
     bool elsewhere = false;                 ///< the bricks ran where a BrickRunner sent them
+    /// passes run again because the whole surface's refit would not have kept every super step (smooth_in_bricks)
+    int refit_passes_redone = 0;
     int total() const { return bricks[0] * bricks[1] * bricks[2]; }
 };
 

@@ -104,12 +104,12 @@ struct SmoothOptions {
         ///< stage, D doubled) or a first one that already raises D is undone, and the rest of the
         ///< refit time starts again in super steps from there (up to twice), then in explicit steps. 0: the explicit steps of refit_dt (the default before version 0.2).
     bool refit_whole_time = false;  ///< Bilateral, Guided, TotalVariation with refit_super_steps > 0: keep every super
-        ///< step that stays finite and does not run away (D doubled), whatever else D does (no patient stop, no
-        ///< undoing a super step that raised D). For work done brick by brick (smooth_in_bricks), where D is a
-        ///< window's, not the whole surface's, and a window's border alone can raise it; the whole run keeps every
-        ///< super step wherever D falls to the end, as on fandisk_n0.3 at 256 and 512 and most of the study's
-        ///< pairs. A super step that runs away is undone and the time restarted as in the whole run: kept, it
-        ///< left a pit 4 voxels deep in fandisk_n0.3 at 128 (docs/history/benchmarks-2026.md, "Bricks").
+        ///< step that stays finite, whatever D does (no patient stop, no undoing a super step that raised D or
+        ///< doubled it, no restart in explicit steps for one). For work done brick by brick (smooth_in_bricks),
+        ///< where D is a window's, not the whole surface's, and a window's border alone can raise it: the caller
+        ///< sums the windows' D (SmoothIteration::refit_window_energy) and checks that the whole surface's refit
+        ///< would have kept every super step too (super_steps_keep_every_step), as on fandisk_n0.3 at 256 and 512
+        ///< and most of the study's pairs (docs/history/benchmarks-2026.md, "Bricks").
     /// For work done brick by brick (smooth_in_bricks): with preserve_volume, measure the volume before and after
     /// each refit over the blocks window_lo <= (bi, bj, bk) < window_hi only (SmoothIteration::volume_before, ...)
     /// and leave the shift that restores it to the caller, who sums the bricks' measures; and count the filters'
@@ -206,6 +206,12 @@ int surface_sample_stride(const SmoothOptions& opt);
 /// The refit steps per main iteration for SmoothOptions::refit_max_steps = 0 (see there).
 int default_refit_steps(const SmoothOptions& opt);
 
+/// Whether the refit in super steps (refit_super_steps > 0, the default filters' refit) keeps every super step
+/// when D, where it checks it, takes the values d: one at the start of each super step, then the end's. False where
+/// a check would act (a super step that runs away or doubles D, the patient stop, a last step that raised D), where
+/// a value is not finite, or where d does not hold refit_super_steps + 1 values.
+bool super_steps_keep_every_step(const std::vector<double>& d, const SmoothOptions& options);
+
 /// What one main iteration of smooth_volume did (energies in voxel units).
 struct SmoothIteration {
     std::vector<double> normal_energy;  ///< G before each normal-loop step and after the last
@@ -234,6 +240,10 @@ struct SmoothIteration {
     /// in kRoughnessBins bins over [0, 2) (the chord between two unit normals): the roughness of several windows
     /// together is the 75th percentile of their summed histograms (roughness_of_histogram).
     std::vector<std::uint32_t> roughness_histogram;
+    /// defer_volume_shift, the refit in super steps: D over the window's blocks (window_lo … window_hi) wherever the
+    /// refit evaluates D for its checks (the start of each super step, and the end), so that a caller can sum the
+    /// windows' and check the whole surface's refit (super_steps_keep_every_step).
+    std::vector<double> refit_window_energy;
     float roughness = 0;          ///< Bilateral, Guided, TotalVariation: what the filter left, the 75th percentile of
                                   ///< |N_i − M_i| over the surface samples, M_i the plain Gaussian mean
                                   ///< of the filtered normals over i's disc (0 for the other modes)

@@ -277,6 +277,40 @@ TEST(Bricks, BadMessagesAreRefused) {
     }
 }
 
+// The whole run's refit checks, on D given: a refit that keeps its 6 super steps reads as such from its own record,
+// and each check the refit makes (a step that doubles D, a patient stop, a last step that raises D, a value not
+// finite, a record of another length) reads as one.
+TEST(Bricks, TheRefitsChecksReadFromD) {
+    const Mesh m = noisy_scene(0.03);
+    SmoothOptions opt = bilateral(1, 1.5f);
+    const auto q = make_bvh_query(m);
+    Volume v = scan_convert(m, *q, scan_at(40));
+    const SmoothReport r = smooth_volume(v, opt);
+    ASSERT_EQ(r.iterations.size(), 1u);
+    const SmoothIteration& it = r.iterations.front();
+    ASSERT_EQ(it.refit_steps, kDefaultRefitSuperSteps) << "the scene's refit restarted";
+    EXPECT_TRUE(super_steps_keep_every_step(it.refit_energy, opt));
+    EXPECT_TRUE(it.refit_window_energy.empty());  // a window's D only under defer_volume_shift
+
+    opt.refit_max_steps = 60;
+    const std::vector<double> falling{8, 6, 5, 4.5, 4.2, 4.1, 4.0};
+    EXPECT_TRUE(super_steps_keep_every_step(falling, opt));
+    std::vector<double> d = falling;
+    d[3] = 13;  // the third super step more than doubled D
+    EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+    d = falling;
+    d.back() = 4.2;  // the last super step raised D
+    EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+    d = {8, 6, 6, 6, 6, 6, 6};  // no new low for longer than the patience
+    EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+    d = falling;
+    d[2] = std::nan("");
+    EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+    d = falling;
+    d.pop_back();
+    EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+}
+
 TEST(Bricks, BadOptionsAreRefused) {
     const Mesh m = noisy_scene(0.0);
     const auto q = make_bvh_query(m);

@@ -95,6 +95,21 @@ void target_curvature(StageContext& c, RefitPenalty p) {
     });
 }
 
+/// defer_volume_shift (a brick's window): the part of D over the blocks window_lo ≤ (bi, bj, bk) < window_hi, from
+/// the active blocks' energies, appended to the iteration's refit_window_energy.
+void record_window_energy(StageContext& c, const std::vector<double>& energy) {
+    if (!c.opt.defer_volume_shift) return;
+    const std::vector<std::int32_t>& active = c.band.active();
+    double sum = 0.0;
+    for (std::size_t k = 0; k < active.size(); ++k) {
+        const auto& bc = c.band.block_coord(std::size_t(active[k]));
+        bool inside = true;
+        for (int a = 0; a < 3; ++a) inside &= bc[a] >= c.opt.window_lo[a] && bc[a] < c.opt.window_hi[a];
+        if (inside) sum += energy[k];
+    }
+    c.record().refit_window_energy.push_back(sum);
+}
+
 /// D of the current φ (no update).
 double refit_energy(StageContext& c) {
     const Band& band = c.band;
@@ -111,6 +126,7 @@ double refit_energy(StageContext& c) {
         for (int z = 0; z < kBlockDim; ++z) add_plane_energy(P, mask, w.normals, base, z, 0, kBlockDim - 1, e);
         energy[k] = e;
     });
+    record_window_energy(c, energy);
     double sum = 0.0;
     for (const double e : energy) sum += e;
     return sum;
@@ -243,6 +259,7 @@ double rkl2_stage(StageContext& c, const Samples& y1, const Samples* y2, const S
         energy[k] = e;
     });
     if (bad) nonfinite_out = true;
+    if (first) record_window_energy(c, energy);
     double sum = 0.0;
     for (const double e : energy) sum += e;
     return sum;
@@ -303,7 +320,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         const double d = rkl2_stage(c, phi, nullptr, phi, m0, 0.0, 0.0, k.mut[1] * tau, 0.0, *ring[0], nonfinite);
         ++c.record().refit_evaluations;
         ds.push_back(d);
-        if (step > 0 && d > 2.0 * best) {  // the last super step ran away: undo it
+        if (step > 0 && d > 2.0 * best && !c.opt.refit_whole_time) {  // the last super step ran away: undo it
             undo_last();
             runaway = true;
             break;
@@ -348,7 +365,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
     if (!stopped && !runaway) {
         d_end = refit_energy(c);
         ds.push_back(d_end);
-        if (kept > 0 && d_end > 2.0 * best) {  // the last super step ran away: undo it
+        if (kept > 0 && d_end > 2.0 * best && !c.opt.refit_whole_time) {  // the last super step ran away: undo it
             undo_last();
             runaway = true;
         } else if (kept > 0 && !(d_end <= prev) && !c.opt.refit_whole_time) {  // it raised D: undo it, as the
@@ -491,3 +508,38 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule sche
 }  // namespace
 
 }  // namespace normalflow::engine
+
+namespace normalflow {
+
+bool super_steps_keep_every_step(const std::vector<double>& d, const SmoothOptions& options) {
+    // run_super_steps's checks, on D given: the same constants, the same order
+    const int n = options.refit_super_steps;
+    if (n <= 0 || d.size() != std::size_t(n) + 1) return false;
+    const int steps = options.refit_max_steps > 0 ? options.refit_max_steps : default_refit_steps(options);
+    const double dt = std::min(double(options.refit_dt), double(engine::kMaxDt));
+    const double total = double(steps) * dt;
+    const double growth = engine::kSuperStepGrowth;
+    const double tau0 = growth == 1.0 ? total / n : total * (growth - 1.0) / (std::pow(growth, n) - 1.0);
+    SmoothOptions resolved = options;
+    resolved.refit_max_steps = steps;
+    const double patience_time = double(engine::explicit_patience(resolved)) * dt;
+    double best = 0.0, prev = 0.0, since_best = 0.0, tau_prev = 0.0;
+    for (int step = 0; step < n; ++step) {
+        const double x = d[std::size_t(step)];
+        if (!std::isfinite(x)) return false;
+        if (step > 0 && x > 2.0 * best) return false;
+        if (step == 0 || x < best * (1.0 - options.refit_tolerance)) {
+            best = step == 0 ? x : std::min(best, x);
+            since_best = 0.0;
+        } else {
+            since_best += tau_prev;
+        }
+        if (step > 0 && since_best >= patience_time) return false;
+        tau_prev = tau0 * std::pow(growth, step);
+        prev = x;
+    }
+    const double end = d.back();
+    return std::isfinite(end) && !(end > 2.0 * best) && end <= prev;
+}
+
+}  // namespace normalflow
