@@ -434,7 +434,7 @@ struct Writer {
     void put_vector(const std::vector<T>& v) {
         static_assert(std::is_trivially_copyable_v<T>);
         put(std::uint64_t(v.size()));
-        out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+        if (!v.empty()) out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
     }
     void put_string(const std::string& s) {
         put(std::uint64_t(s.size()));
@@ -500,7 +500,7 @@ struct Reader {
         const auto n = get<std::uint64_t>();
         if (n > (in.size() - at) / sizeof(T)) bad("the message is truncated");
         std::vector<T> v(n);
-        std::memcpy(v.data(), in.data() + at, n * sizeof(T));
+        if (n > 0) std::memcpy(v.data(), in.data() + at, n * sizeof(T));  // (an empty vector's data() may be null)
         at += n * sizeof(T);
         return v;
     }
