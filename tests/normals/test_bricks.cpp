@@ -165,7 +165,7 @@ TEST(Bricks, ACheckpointStopsAfterTheFirstPassAndThreadsChangeNothing) {
 // forgets one, is caught.
 TEST(Bricks, BricksCarriedAsMessagesGiveTheRunHereBitForBit) {
     const Mesh m = noisy_scene(0.03);
-    const ScanConvertOptions scan = scan_at(40);
+    const ScanConvertOptions scan = scan_at(32);
     const SmoothOptions opt = bilateral(2, 1.5f);
     const BrickOptions b{.brick_voxels = 16};
     const auto q = make_bvh_query(m);
