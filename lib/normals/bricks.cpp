@@ -119,7 +119,7 @@ BrickRunner run_on_threads(int at_once) {
 // reinitialise_only: each window of `from` only reinitialised (reinitialise_volume), as a run ends.
 Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks, int halo_blocks, const Volume* from,
               Volume& to, BrickReport& rep, Progress* progress, double done_before, double share,
-              bool reinitialise_input, bool reinitialise_only = false) {
+              bool reinitialise_input, bool reinitialise_only = false, const BrickRefit& refit = {}) {
     Pass result;
     const auto& gbd = to.block_dims;
     std::array<int, 3> n{};
@@ -144,6 +144,7 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
         job.scan = from == nullptr;
         job.reinitialise_only = reinitialise_only;
         job.reinitialise_input = reinitialise_input;
+        job.refit = refit;
         const auto t0 = Clock::now();
         if (from) job.input = window_of(*from, job.window);
         rep.seconds_scan += seconds_since(t0);
@@ -250,6 +251,9 @@ BrickOutcome run_brick(const BrickContext& c, BrickJob job) {
     } else if (interior_band) {
         SmoothOptions brick = c.engine;
         brick.reinitialise_input = job.reinitialise_input;
+        brick.refit_whole_time = job.refit.whole_time;
+        brick.refit_replay_count = job.refit.replay_count;
+        brick.refit_replay = job.refit.replay;
         const std::array<int, 3> gbd{(c.grid.dims[0] + kBlockDim - 1) / kBlockDim,
                                      (c.grid.dims[1] + kBlockDim - 1) / kBlockDim,
                                      (c.grid.dims[2] + kBlockDim - 1) / kBlockDim};
@@ -345,30 +349,63 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         raw = false;
     };
     detail::begin(progress, "bricks");
-    // The refit's checks: each brick keeps every super step (its D is its window's), and the whole surface's D, the
-    // bricks' interiors' summed, must show that the whole run would have kept them too. Where it would not (a super
-    // step that runs away, a patient stop), the pass runs again with each brick's refit checking its own window's D:
-    // no runaway step is kept, but the windows decide apart (fandisk_n0.3 at 128 in bricks of 64: 0.17 voxel from the
-    // whole run; kept, the runaway step left a pit 4 voxels deep).
+    // The refit's checks. Each brick keeps every super step (its D is its window's, which its border alone can raise),
+    // and the whole surface's D, the bricks' interiors' summed, says what the whole run would have decided
+    // (decide_super_steps). Where it would have undone a super step (one that ran away, a patient stop, a last step
+    // that raised D), the pass runs again with that decision replayed in every brick (SmoothOptions::refit_replay),
+    // and the attempt after it checked the same way. Where the whole run would go on in explicit steps, or a brick's
+    // D cannot be summed with the others' (a stage that was not finite), each brick decides in its own window (the
+    // windows then decide apart: a few tenths of a voxel from the whole run), with a warning.
     const bool checked_refit = opt.refit_super_steps > 0 && opt.mode != SmoothMode::MeanCurvature &&
                                (is_neighbourhood_filter(opt.mode) || opt.mode == SmoothMode::TotalVariation);
     for (int it = 0; it < iterations; ++it) {
         next.reset(grid, engine::kHalfWidth);
         const double share = 1.0 / iterations;
-        Pass p = run_pass(context, run, brick_blocks, halo_blocks, it == 0 ? nullptr : &cur, next, rep, progress,
-                          double(it) * share, share, it == 0 || raw);
-        if (checked_refit && p.any &&
-            !(p.refit_energy_aligned && super_steps_keep_every_step(p.refit_energy, context.engine))) {
-            context.engine.refit_whole_time = false;
+        BrickRefit refit;
+        const auto pass = [&] {
+            return run_pass(context, run, brick_blocks, halo_blocks, it == 0 ? nullptr : &cur, next, rep, progress,
+                            double(it) * share, share, it == 0 || raw, false, refit);
+        };
+        // a brick that keeps every super step can keep one that runs away until its φ is no longer finite (a
+        // NumericalError): its D is then no decision's, as where it cannot be summed
+        Pass p;
+        bool failed = false;
+        const auto checked_pass = [&] {
+            try {
+                p = pass();
+                failed = false;
+            } catch (const NumericalError&) {
+                if (!checked_refit) throw;
+                failed = true;
+            }
+        };
+        checked_pass();
+        double left = refit_time(context.engine);
+        while (checked_refit && (failed || p.any)) {
+            using Then = SuperStepDecision::Then;
+            const SuperStepDecision d = !failed && p.refit_energy_aligned
+                                            ? decide_super_steps(p.refit_energy, context.engine, left)
+                                            : SuperStepDecision{};
+            if (d.then == Then::KeepAll) break;
+            const bool replayable = d.then == Then::Stop || (d.then == Then::Restart && d.time_kept > 0.0 &&
+                                                             refit.replay_count + 1 < kRefitSuperStepAttempts);
             next.reset(grid, engine::kHalfWidth);
-            p = run_pass(context, run, brick_blocks, halo_blocks, it == 0 ? nullptr : &cur, next, rep, progress,
-                         double(it) * share, share, it == 0 || raw);
-            context.engine.refit_whole_time = true;
             ++rep.refit_passes_redone;
-            add_new(sr.warnings,
-                    {"iteration " + std::to_string(it + 1) +
-                     ": the whole surface's refit would not keep every super step; each brick decided in "
-                     "its window (the result may differ from the whole run's by a few tenths of a voxel)"});
+            if (!replayable) {
+                refit = BrickRefit{.whole_time = false};
+                p = pass();
+                ++rep.refit_passes_windowed;
+                add_new(sr.warnings,
+                        {"iteration " + std::to_string(it + 1) +
+                         ": the whole surface's refit could not be followed in bricks; each brick decided in its "
+                         "window (the result may differ from the whole run's by a few tenths of a voxel)"});
+                break;
+            }
+            refit.replay[std::size_t(refit.replay_count++)] = d.then == Then::Stop ? -d.kept - 1 : d.kept;
+            checked_pass();
+            left -= d.time_kept;
+            // the refit ends with the decision replayed: nothing after it to check
+            if (d.then == Then::Stop || !(left > 0.5 * refit_step_dt(context.engine))) break;
         }
         ++rep.passes;
         add_new(sr.warnings, p.warnings);
@@ -579,6 +616,9 @@ void job_fields(IO& io, Job& job) {
     io.field(job.reinitialise_only);
     io.field(job.reinitialise_input);
     io.field(job.input);
+    io.field(job.refit.whole_time);
+    io.field(job.refit.replay_count);
+    io.field(job.refit.replay);
 }
 
 template <class IO, class Outcome>
@@ -620,6 +660,8 @@ BrickJob brick_job_from_message(std::string_view message) {
     for (int a = 0; a < 3; ++a)
         if (!(job.window.lo[a] <= job.lo[a] && job.lo[a] < job.hi[a] && job.hi[a] <= job.window.hi[a]))
             r.bad("the brick's interior is not inside its window");
+    if (job.refit.replay_count < 0 || job.refit.replay_count > kRefitSuperStepAttempts)
+        r.bad("its refit replays " + std::to_string(job.refit.replay_count) + " attempts");
     return job;
 }
 

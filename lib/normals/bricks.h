@@ -51,8 +51,10 @@ struct BrickReport {
     double seconds_smooth = 0;              ///< wall seconds of the engine over the bricks (reinitialisation too)
                                             ///< (summed over the bricks, where ever they ran)
     bool elsewhere = false;                 ///< the bricks ran where a BrickRunner sent them
-    /// passes run again because the whole surface's refit would not have kept every super step (smooth_in_bricks)
+    /// passes run again because the whole surface's refit would not have kept every super step (smooth_in_bricks):
+    /// with its decision replayed in every brick, or (refit_passes_windowed of them) each brick deciding in its window
     int refit_passes_redone = 0;
+    int refit_passes_windowed = 0;
     int total() const { return bricks[0] * bricks[1] * bricks[2]; }
 };
 
@@ -68,6 +70,14 @@ struct BrickContext {
 };
 
 /// One brick of a pass over the bricks: its interior and window, and what the window starts from.
+/// A pass's refit, the same for all its bricks: SmoothOptions' refit_whole_time, refit_replay_count and refit_replay
+/// (the whole surface's decisions, replayed in every brick), over the context's engine options.
+struct BrickRefit {
+    bool whole_time = true;
+    int replay_count = 0;
+    std::array<int, kRefitSuperStepAttempts> replay{};
+};
+
 struct BrickJob {
     int index = 0;                   ///< its place in the pass (bricks in order of z, then y, then x)
     std::array<int, 3> lo{0, 0, 0};  ///< the interior, blocks of the grid
@@ -77,6 +87,7 @@ struct BrickJob {
     bool reinitialise_only = false;  ///< the window is only reinitialised (reinitialise_volume), as a run ends
     bool reinitialise_input = true;  ///< SmoothOptions::reinitialise_input for the engine's run
     Volume input;                    ///< the window of the last iteration's result (window_grid), unless scan
+    BrickRefit refit;                ///< the pass's refit
 };
 
 /// What a brick made: its interior as its engine left it.
@@ -125,7 +136,9 @@ void brick_context_from_message(std::string_view message, BrickContext& context,
 /// summed, SmoothOptions::defer_volume_shift), the filters' automatic stop (opt.iterations = 0: the roughness of
 /// the iteration over the bricks' interiors' samples together, SmoothIteration::roughness_histogram), the checkpoint, and then the
 /// band moved and φ reinitialised. Within an iteration each brick's refit keeps its whole time
-/// (SmoothOptions::refit_whole_time), as the whole run does wherever D falls to the end. The result has the grid
+/// (SmoothOptions::refit_whole_time), as the whole run does wherever D falls to the end; where the bricks' D summed
+/// shows that the whole run would have undone a super step, the pass runs again with that decision replayed in every
+/// brick (SmoothOptions::refit_replay). The result has the grid
 /// and layout smooth_volume returns (a band of engine::kHalfWidth voxels). Memory: one window's engine at a time,
 /// plus two copies of the result's band (the last iteration's and the next).
 ///

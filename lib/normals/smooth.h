@@ -46,6 +46,9 @@ const char* to_string(SmoothMode mode);
 
 /// SmoothOptions::refit_super_steps' default.
 inline constexpr int kDefaultRefitSuperSteps = 6;
+/// Attempts of the refit in super steps: after one runs away the rest of the refit time starts again in super steps,
+/// this many attempts in all, then in explicit steps.
+inline constexpr int kRefitSuperStepAttempts = 2;
 
 /// Options of smooth_volume. Lengths and times are in voxel units (h = 1) unless stated.
 struct SmoothOptions {
@@ -110,6 +113,13 @@ struct SmoothOptions {
         ///< sums the windows' D (SmoothIteration::refit_window_energy) and checks that the whole surface's refit
         ///< would have kept every super step too (super_steps_keep_every_step), as on fandisk_n0.3 at 256 and 512
         ///< and most of the study's pairs (docs/history/benchmarks-2026.md, "Bricks").
+    /// For work done brick by brick (smooth_in_bricks): the whole surface's refit decisions (decide_super_steps on the
+    /// windows' D summed), replayed in place of the window's own. Attempt a < refit_replay_count of the refit in super
+    /// steps runs refit_replay[a] >= 0 super steps and starts the rest of the refit time again (a runaway undone), or
+    /// runs -refit_replay[a] - 1 and stops there (a patient stop, or a last step that raised D); no check of its own.
+    /// The attempt after them (if any) runs as refit_whole_time says, its D alone in refit_window_energy.
+    int refit_replay_count = 0;
+    std::array<int, kRefitSuperStepAttempts> refit_replay{};
     /// For work done brick by brick (smooth_in_bricks): with preserve_volume, measure the volume before and after
     /// each refit over the blocks window_lo <= (bi, bj, bk) < window_hi only (SmoothIteration::volume_before, ...)
     /// and leave the shift that restores it to the caller, who sums the bricks' measures; and count the filters'
@@ -211,6 +221,28 @@ int default_refit_steps(const SmoothOptions& opt);
 /// a check would act (a super step that runs away or doubles D, the patient stop, a last step that raised D), where
 /// a value is not finite, or where d does not hold refit_super_steps + 1 values.
 bool super_steps_keep_every_step(const std::vector<double>& d, const SmoothOptions& options);
+
+/// What the refit in super steps decides on one attempt (refit_super_steps > 0; run_super_steps' checks on D given):
+/// d holds D at the start of each super step, then at the end (refit_super_steps + 1 values); `total` is the refit
+/// time the attempt covers (voxel²; the first attempt's: refit_time(options)).
+struct SuperStepDecision {
+    enum class Then {
+        KeepAll,  ///< every super step kept: the refit ends
+        Restart,  ///< `kept` kept, the next one undone (it ran away): the rest of the time starts again, in super
+                  ///< steps (or in explicit steps where none was kept)
+        Stop,     ///< `kept` kept, the next undone (the patient stop, or a last step that raised D): the refit ends
+        Unknown,  ///< d holds a value that is not finite, or not refit_super_steps + 1 values
+    };
+    Then then = Then::Unknown;
+    int kept = 0;
+    double time_kept = 0.0;  ///< the refit time of the super steps kept (voxel²)
+};
+SuperStepDecision decide_super_steps(const std::vector<double>& d, const SmoothOptions& options, double total);
+/// The refit time of one main iteration (voxel²): its steps (refit_max_steps, or the mode's default) times refit_dt
+/// (at most the stability bound).
+double refit_time(const SmoothOptions& options);
+/// The refit's time step (refit_dt, at most the explicit stability bound), voxel².
+double refit_step_dt(const SmoothOptions& options);
 
 /// What one main iteration of smooth_volume did (energies in voxel units).
 struct SmoothIteration {

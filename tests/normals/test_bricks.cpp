@@ -255,9 +255,16 @@ TEST(Bricks, BadMessagesAreRefused) {
     job.window = BlockWindow{{0, 0, 0}, {6, 6, 6}};
     job.input = Volume(window_grid(c.grid, job.window), 8.0f);
     job.input.set(1, 2, 3, 0.25f);
+    job.refit = BrickRefit{.whole_time = true, .replay_count = 2, .replay = {3, -2}};
     const std::string message = brick_message(job);
     const BrickJob read = brick_job_from_message(message);
     EXPECT_EQ(read.index, 3);
+    EXPECT_TRUE(read.refit.whole_time);
+    EXPECT_EQ(read.refit.replay_count, 2);
+    EXPECT_EQ(read.refit.replay, job.refit.replay);
+    BrickJob replays = job;
+    replays.refit.replay_count = kRefitSuperStepAttempts + 1;
+    EXPECT_THROW(brick_job_from_message(brick_message(replays)), InvalidInput);
     EXPECT_EQ(read.input.values, job.input.values);
     EXPECT_EQ(read.input.block_table, job.input.block_table);
     try {
@@ -303,9 +310,39 @@ TEST(Bricks, TheRefitsChecksReadFromD) {
     EXPECT_FALSE(super_steps_keep_every_step(d, opt));
     d = {8, 6, 6, 6, 6, 6, 6};  // no new low for longer than the patience
     EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+    // what the refit decides instead, and the time it keeps: super steps of 6/63, 12/63, ... of the 6 voxel² (60 steps
+    // of 0.1)
+    using Then = SuperStepDecision::Then;
+    const double total = refit_time(opt), tau0 = total / 63;
+    EXPECT_NEAR(total, 6.0, 1e-6);
+    SuperStepDecision dec = decide_super_steps(falling, opt, total);
+    EXPECT_EQ(dec.then, Then::KeepAll);
+    EXPECT_EQ(dec.kept, 6);
+    EXPECT_NEAR(dec.time_kept, total, 1e-12);
+    d = falling;
+    d[3] = 13;  // the third super step doubled D: it is undone and the rest starts again
+    dec = decide_super_steps(d, opt, total);
+    EXPECT_EQ(dec.then, Then::Restart);
+    EXPECT_EQ(dec.kept, 2);
+    EXPECT_NEAR(dec.time_kept, 3 * tau0, 1e-12);
+    d = falling;
+    d.back() = 4.2;  // the last one raised D: undone, and the refit ends
+    dec = decide_super_steps(d, opt, total);
+    EXPECT_EQ(dec.then, Then::Stop);
+    EXPECT_EQ(dec.kept, 5);
+    d = {8, 6, 6, 6, 6, 6, 6};  // no new low for 0.19 + 0.38 voxel² (the patience: 5 steps, 0.5): the third undone
+    dec = decide_super_steps(d, opt, total);
+    EXPECT_EQ(dec.then, Then::Stop);
+    EXPECT_EQ(dec.kept, 2);
+    d = {8, 9, 9, 9, 9, 9, 9};  // the first super step raised D and the patience undoes it: explicit steps next
+    dec = decide_super_steps(d, opt, 8 * total);  // its first super step lasts 0.76 voxel²
+    EXPECT_EQ(dec.then, Then::Restart);
+    EXPECT_EQ(dec.kept, 0);
+    EXPECT_EQ(dec.time_kept, 0.0);
     d = falling;
     d[2] = std::nan("");
     EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+    EXPECT_EQ(decide_super_steps(d, opt, total).then, Then::Unknown);
     d = falling;
     d.pop_back();
     EXPECT_FALSE(super_steps_keep_every_step(d, opt));

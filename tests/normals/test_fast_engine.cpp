@@ -211,6 +211,78 @@ TEST(FastEngine, SuperStepsThatRunAwayFallBackToExplicitSteps) {
         }
 }
 
+// The refit's decisions can be made from D alone and replayed (what smooth_in_bricks does with the bricks' D summed):
+// a refit that keeps every super step whatever D does records D where the refit checks it, decide_super_steps reads
+// the decision from it, and a run that replays it (and keeps every super step of the attempt after) gives φ bit for
+// bit the run that decided by itself. Long refit times on heavy noise make the refit undo super steps; lengths where
+// the whole run goes on in explicit steps are left out (those are not replayed).
+TEST(FastEngine, TheRefitsDecisionsReadFromDAndReplayedAreItsOwn) {
+    using Then = SuperStepDecision::Then;
+    int replayed = 0, restarts = 0, stops = 0;
+    struct Case {
+        int super_steps;
+        float ell;
+        double noise;
+    };
+    // the first two undo a super step and go on in super steps, the third goes on in explicit steps, the default keeps
+    // every super step
+    for (const Case k :
+         {Case{2, 4.0f, 0.6}, Case{2, 3.0f, 0.8}, Case{2, 8.0f, 0.6}, Case{kDefaultRefitSuperSteps, 8.0f, 0.6}}) {
+        const int steps = k.super_steps;
+        const float ell = k.ell;
+        const double noise = k.noise;
+        const std::uint32_t seed = 21u;
+        Volume v = make_volume(40, 1.0, box_sdf(Vec3d(20.3, 19.6, 20.2), Vec3d(11, 9, 10)));
+        add_noise(v, noise, seed);
+        SmoothOptions o = bilateral(ell);
+        o.iterations = 1;
+        o.refit_super_steps = steps;
+        Volume own = v;
+        const SmoothReport r = smooth_volume(own, o);
+        SmoothOptions f = o;
+        f.refit_whole_time = true;
+        double left = refit_time(f);
+        const std::size_t n = std::size_t(f.refit_super_steps) + 1;
+        bool done = false;
+        for (int attempt = 0; attempt < kRefitSuperStepAttempts && !done; ++attempt) {
+            Volume x = v;
+            const SmoothReport rx = smooth_volume(x, f);
+            const std::vector<double>& all = rx.iterations[0].refit_energy;
+            ASSERT_GE(all.size(), n);
+            const std::vector<double> d(all.end() - std::ptrdiff_t(n), all.end());
+            const SuperStepDecision dec = decide_super_steps(d, f, left);
+            std::printf("%d steps ell %.0f noise %.2f attempt %d: then %d kept %d (own run: %d steps kept)\n", steps,
+                        ell, noise, attempt, int(dec.then), dec.kept, r.iterations[0].refit_steps);
+            ASSERT_NE(dec.then, Then::Unknown);
+            if (dec.then == Then::KeepAll) {
+                EXPECT_EQ(x.values, own.values) << "ell " << ell << " seed " << seed;
+                EXPECT_EQ(x.block_table, own.block_table);
+                replayed += attempt > 0;
+                done = true;
+                break;
+            }
+            if (dec.then == Then::Restart && (dec.time_kept == 0.0 || attempt + 1 == kRefitSuperStepAttempts)) {
+                EXPECT_GT(r.iterations[0].refit_steps, f.refit_super_steps);  // it went on in explicit steps
+                done = true;
+                break;
+            }
+            (dec.then == Then::Stop ? stops : restarts) += 1;
+            f.refit_replay[std::size_t(f.refit_replay_count++)] = dec.then == Then::Stop ? -dec.kept - 1 : dec.kept;
+            left -= dec.time_kept;
+            if (dec.then == Then::Stop || !(left > 0.5 * refit_step_dt(f))) {
+                Volume y = v;
+                smooth_volume(y, f);
+                EXPECT_EQ(y.values, own.values) << "ell " << ell << " seed " << seed;
+                ++replayed;
+                done = true;
+            }
+        }
+    }
+    std::printf("%d runs replayed (%d restarts, %d stops)\n", replayed, restarts, stops);
+    EXPECT_EQ(restarts, 2);
+    EXPECT_EQ(replayed, 2);
+}
+
 TEST(FastEngine, NegativeSuperStepsAreRefused) {
     Volume v = make_volume(24, 1.0, sphere_sdf(Vec3d(12, 12, 12), 6.0));
     SmoothOptions o = bilateral(4.0f);

@@ -303,8 +303,9 @@ TEST(Pipeline, OverTheMemoryLimitTheEngineRunsInBricksAndGivesTheWholeRunsSurfac
 
 // A runaway refit is caught over the whole surface: fandisk_n0.3 at 128 has a super step that doubles D (the whole
 // run undoes it and restarts the refit's time). Bricks that kept it left a pit 4 voxels deep beside the whole run's
-// surface; the bricks' D summed shows it, the pass runs again with each window checking its own refit, and the result
-// is within 0.2 voxel (the windows decide apart: issue 41's 0.05 is missed there), with a warning.
+// surface; the bricks' D summed shows it, and the pass runs again with the whole surface's decision replayed in every
+// brick (each window checking its own refit instead left it 0.18 voxel away). Within issue 41's 0.05 voxel, no
+// warning.
 TEST(Pipeline, ARunawayRefitIsCaughtOverTheWholeSurface) {
     const std::string path = std::string(NORMALFLOW_TEST_DATA) + "/pairs_gnf/fandisk_n0.3.ply";
     if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " missing";
@@ -320,12 +321,12 @@ TEST(Pipeline, ARunawayRefitIsCaughtOverTheWholeSurface) {
     o.brick_voxels = 64;
     const PipelineResult bricked = smooth_mesh(m, o);
     ASSERT_TRUE(bricked.report.bricked);
-    EXPECT_EQ(bricked.report.bricks.refit_passes_redone, 1);
-    EXPECT_TRUE(std::any_of(bricked.report.warnings.begin(), bricked.report.warnings.end(),
-                            [](const std::string& w) { return w.find("each brick decided") != std::string::npos; }));
+    EXPECT_GE(bricked.report.bricks.refit_passes_redone, 1);
+    EXPECT_EQ(bricked.report.bricks.refit_passes_windowed, 0);
+    EXPECT_TRUE(bricked.report.warnings.empty()) << bricked.report.warnings.front();
     EXPECT_TRUE(bricked.report.output.closed);
     EXPECT_TRUE(bricked.report.output.manifold);
-    EXPECT_LT(sampled_hausdorff(bricked.mesh, whole.mesh).hausdorff, 0.25 * h);
+    EXPECT_LT(sampled_hausdorff(bricked.mesh, whole.mesh).hausdorff, 0.05 * h);
 }
 
 TEST(Pipeline, BadOptionsThrowInvalidInputNamingTheField) {

@@ -181,7 +181,7 @@ namespace {
 /// 5.41°, 1.5 4.84°, 2 4.83°, 3 (4 steps) 4.92°.
 constexpr double kSuperStepGrowth = 2.0;
 /// Restarts in super steps after one ran away, before the rest of the refit goes to explicit steps.
-constexpr int kSuperStepRetries = 2;
+constexpr int kSuperStepRetries = kRefitSuperStepAttempts;
 
 /// The coefficients of an s-stage Runge–Kutta–Legendre super step of second order (Meyer,
 /// Balsara & Aslam 2014, Eq. 16–17): Y_1 = Y_0 + μ̃_1 τ L(Y_0); Y_j = μ_j Y_{j−1} + ν_j Y_{j−2} +
@@ -285,7 +285,8 @@ struct SuperResult {
 /// (second order) from φ: the explicit refit's flow with far fewer evaluations of its rate (stages
 /// ∝ √time instead of ∝ time). D (appended to ds) is evaluated at the start of each super step;
 /// the patient stop of the explicit refit, counted in time.
-SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& ds) {
+/// replay >= 0: exactly that many super steps, no check (SmoothOptions::refit_replay).
+SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& ds, int replay = -1) {
     WorkBuffers& w = c.band.work();
     Samples& phi = c.band.phi();
     const double dt = std::min(c.opt.refit_dt, kMaxDt);
@@ -306,12 +307,14 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
     double time_kept = 0.0;  // the refit time φ has been carried through
     int kept = 0;
     bool stopped = false, runaway = false;
+    const bool checks = !c.opt.refit_whole_time && replay < 0;
     const auto undo_last = [&] {  // back to the start of the last super step kept
         std::swap(phi, prev_phi);
         --kept;
         time_kept -= tau_prev;
     };
     for (int step = 0; step < n; ++step) {
+        if (step == replay) break;
         c.ctl.poll();
         const double tau = tau0 * std::pow(growth, step);
         const Rkl2 k(rkl2_stages(tau, dt));
@@ -320,7 +323,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         const double d = rkl2_stage(c, phi, nullptr, phi, m0, 0.0, 0.0, k.mut[1] * tau, 0.0, *ring[0], nonfinite);
         ++c.record().refit_evaluations;
         ds.push_back(d);
-        if (step > 0 && d > 2.0 * best && !c.opt.refit_whole_time) {  // the last super step ran away: undo it
+        if (step > 0 && d > 2.0 * best && checks) {  // the last super step ran away: undo it
             undo_last();
             runaway = true;
             break;
@@ -331,7 +334,7 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         } else {
             since_best += tau_prev;
         }
-        if (step > 0 && since_best >= patience_time && !c.opt.refit_whole_time) {
+        if (step > 0 && since_best >= patience_time && checks) {
             undo_last();
             d_end = prev;
             stopped = true;
@@ -362,14 +365,15 @@ SuperResult run_super_steps(StageContext& c, double total, std::vector<double>& 
         prev = d;
         c.ctl.tick(0.5 + 0.5 * double(step + 1) / n);
     }
+    if (replay >= 0) return {kept, prev, false, time_kept};
     if (!stopped && !runaway) {
         d_end = refit_energy(c);
         ds.push_back(d_end);
-        if (kept > 0 && d_end > 2.0 * best && !c.opt.refit_whole_time) {  // the last super step ran away: undo it
+        if (kept > 0 && d_end > 2.0 * best && checks) {  // the last super step ran away: undo it
             undo_last();
             runaway = true;
-        } else if (kept > 0 && !(d_end <= prev) && !c.opt.refit_whole_time) {  // it raised D: undo it, as the
-                                                                               // explicit refit does
+        } else if (kept > 0 && !(d_end <= prev) && checks) {  // it raised D: undo it, as the
+                                                              // explicit refit does
             undo_last();
             d_end = prev;
         }
@@ -397,7 +401,13 @@ void refit_super_stepping(StageContext& c) {
             d_end = e.d_end;
             break;
         }
-        const SuperResult r = run_super_steps(c, left, ds);
+        // the whole surface's decisions (smooth_in_bricks), then the attempt after them as the options say, its D
+        // alone in the window's record
+        const bool replayed = attempt < c.opt.refit_replay_count;
+        const int replay = replayed ? c.opt.refit_replay[std::size_t(attempt)] : -1;
+        if (!replayed && attempt > 0 && attempt == c.opt.refit_replay_count) c.record().refit_window_energy.clear();
+        SuperResult r = run_super_steps(c, left, ds, replayed ? (replay >= 0 ? replay : -replay - 1) : -1);
+        r.runaway |= replayed && replay >= 0;
         kept += r.kept;
         d_end = r.d_end;
         if (!r.runaway) break;
@@ -511,35 +521,63 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule sche
 
 namespace normalflow {
 
-bool super_steps_keep_every_step(const std::vector<double>& d, const SmoothOptions& options) {
-    // run_super_steps's checks, on D given: the same constants, the same order
-    const int n = options.refit_super_steps;
-    if (n <= 0 || d.size() != std::size_t(n) + 1) return false;
+double refit_step_dt(const SmoothOptions& options) {
+    return std::min(double(options.refit_dt), double(engine::kMaxDt));
+}
+
+double refit_time(const SmoothOptions& options) {
     const int steps = options.refit_max_steps > 0 ? options.refit_max_steps : default_refit_steps(options);
-    const double dt = std::min(double(options.refit_dt), double(engine::kMaxDt));
-    const double total = double(steps) * dt;
+    return double(steps) * refit_step_dt(options);
+}
+
+SuperStepDecision decide_super_steps(const std::vector<double>& d, const SmoothOptions& options, double total) {
+    // run_super_steps's checks, on D given: the same constants, the same order
+    using Then = SuperStepDecision::Then;
+    const int n = options.refit_super_steps;
+    if (n <= 0 || d.size() != std::size_t(n) + 1) return {};
+    const double dt = refit_step_dt(options);
     const double growth = engine::kSuperStepGrowth;
     const double tau0 = growth == 1.0 ? total / n : total * (growth - 1.0) / (std::pow(growth, n) - 1.0);
     SmoothOptions resolved = options;
-    resolved.refit_max_steps = steps;
+    resolved.refit_max_steps = options.refit_max_steps > 0 ? options.refit_max_steps : default_refit_steps(options);
     const double patience_time = double(engine::explicit_patience(resolved)) * dt;
     double best = 0.0, prev = 0.0, since_best = 0.0, tau_prev = 0.0;
+    SuperStepDecision r;
+    // the time of the steps kept, summed as a replay of them sums it (run_super_steps)
+    const auto undo_last = [&](Then then) {
+        --r.kept;
+        r.time_kept = 0.0;
+        for (int k = 0; k < r.kept; ++k) r.time_kept += tau0 * std::pow(growth, k);
+        r.then = then;
+        return r;
+    };
     for (int step = 0; step < n; ++step) {
         const double x = d[std::size_t(step)];
-        if (!std::isfinite(x)) return false;
-        if (step > 0 && x > 2.0 * best) return false;
+        if (!std::isfinite(x)) return {};
+        if (step > 0 && x > 2.0 * best) return undo_last(Then::Restart);
         if (step == 0 || x < best * (1.0 - options.refit_tolerance)) {
             best = step == 0 ? x : std::min(best, x);
             since_best = 0.0;
         } else {
             since_best += tau_prev;
         }
-        if (step > 0 && since_best >= patience_time) return false;
+        // the patient stop; where it undoes the first super step, the rest of the time goes to explicit steps
+        if (step > 0 && since_best >= patience_time) return undo_last(r.kept == 1 ? Then::Restart : Then::Stop);
         tau_prev = tau0 * std::pow(growth, step);
+        ++r.kept;
+        r.time_kept += tau_prev;
         prev = x;
     }
     const double end = d.back();
-    return std::isfinite(end) && !(end > 2.0 * best) && end <= prev;
+    if (!std::isfinite(end)) return {};
+    if (end > 2.0 * best) return undo_last(Then::Restart);
+    if (!(end <= prev)) return undo_last(Then::Stop);
+    r.then = Then::KeepAll;
+    return r;
+}
+
+bool super_steps_keep_every_step(const std::vector<double>& d, const SmoothOptions& options) {
+    return decide_super_steps(d, options, refit_time(options)).then == SuperStepDecision::Then::KeepAll;
 }
 
 }  // namespace normalflow
