@@ -905,6 +905,20 @@ void smooth_volume_stage(Volume& v, const PipelineOptions& o, double default_len
     r.seconds.total += r.seconds.smooth;
 }
 
+Volume smooth_mesh_to_volume(const Mesh& m, const PipelineOptions& o, PipelineReport* report, Progress* progress,
+                             NormalMap* normal_map) {
+    validate(o);
+    PipelineReport local;
+    PipelineReport& r = report ? *report : local;
+    PipelineOptions scan = o;
+    scan.smoothing = true;
+    const ScanInput in = prepare_scan(m, scan, r, progress, normal_map == nullptr);
+    if (in.o.brick_voxels > 0) return scan_and_smooth_in_bricks(in, m, r, progress, nullptr, nullptr);
+    Volume v = normalflow::scan(in, r, progress);
+    smooth_volume_stage(v, o, m, &r, progress, normal_map);
+    return v;
+}
+
 void smooth_volume_stage(Volume& v, const PipelineOptions& o, const Mesh& input, PipelineReport* report,
                          Progress* progress, NormalMap* normal_map, const SmoothCheckpoint* checkpoint) {
     smooth_volume_stage(v, o, model_length_scale(input), estimate_noise(input).sigma, report, progress, normal_map,

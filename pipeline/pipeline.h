@@ -398,6 +398,12 @@ double auto_sigma_spatial(double noise, double length_unit, double voxel_size);
 void smooth_volume_stage(Volume& v, const PipelineOptions& options, double default_length_scale, double noise = 0,
                          PipelineReport* report = nullptr, Progress* progress = nullptr,
                          NormalMap* normal_map = nullptr, const SmoothCheckpoint* checkpoint = nullptr);
+/// The smoothed volume of a mesh, without extraction (the command line's volume output): mesh_to_volume and
+/// smooth_volume_stage, or, where the whole volume does not fit the memory or options.brick_voxels asks for bricks,
+/// the two brick by brick as smooth_mesh runs them (report.bricked). A normal map (normal_map not null) is the whole
+/// run's: with it the run is not bricked (over the memory it is refused, OutOfMemory).
+Volume smooth_mesh_to_volume(const Mesh& m, const PipelineOptions& options, PipelineReport* report = nullptr,
+                             Progress* progress = nullptr, NormalMap* normal_map = nullptr);
 /// smooth_volume_stage of a volume scan-converted from input: the length unit and the noise are input's
 /// (model_length_scale, estimate_noise).
 void smooth_volume_stage(Volume& v, const PipelineOptions& options, const Mesh& input, PipelineReport* report = nullptr,

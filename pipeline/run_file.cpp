@@ -260,8 +260,8 @@ FileRun mesh_file(Command c, const std::string& input, const std::string& output
     if (volume_out) {  // the smoothed volume itself: scan conversion and the engine, no extraction
         PipelineReport r;
         NormalMap normals;
-        Volume v = naming(input, [&] { return mesh_to_volume(mesh, opt, &r, p); });
-        naming(input, [&] { smooth_volume_stage(v, opt, mesh, &r, p, run.normal_map ? &normals : nullptr); });
+        const Volume v =
+            naming(input, [&] { return smooth_mesh_to_volume(mesh, opt, &r, p, run.normal_map ? &normals : nullptr); });
         f.report = mesh_report_json(c, run, r, t_read, info);
         f.report.set("input", mesh_input_json(input, info, mesh, r));
         stop_notes(opt, r, f);
