@@ -17,6 +17,7 @@
 #include <string>
 
 #include "band/band.h"
+#include "band/gather.h"
 #include "band/layout.h"
 #include "band/run_control.h"
 #include "core/errors.h"
@@ -27,6 +28,65 @@
 #include "normals/stages/volume_constraint.h"
 
 namespace normalflow {
+
+namespace engine {
+namespace {
+
+/// A window's held border (SmoothOptions::fixed_lo, fixed_hi) gives way over fixed_zone voxels: there the filtered
+/// normals are blended toward φ's own (all of φ's at the held layer, none at the zone's inner side), so that the
+/// refit moves the surface less the nearer it is to the layer that does not move (see fixed_zone).
+void relax_toward_border(Band& band, const SmoothOptions& opt) {
+    const int zone = opt.fixed_zone;
+    if (zone <= 0) return;
+    bool any = false;
+    for (int a = 0; a < 3; ++a) any |= opt.fixed_lo[a] > 0 || opt.fixed_hi[a] > 0;
+    if (!any) return;
+    Field3& N = band.work().normals;
+    const Samples& phi = band.phi();
+    const auto dims = band.grid().dims;
+    band.for_blocks(band.all_blocks(), 1, [&](std::size_t, std::int32_t b, Scratch& s) {
+        const auto& bc = band.block_coord(std::size_t(b));
+        float d_block = 1e9f;  // a quick skip
+        for (int a = 0; a < 3; ++a) {
+            const int lo = bc[a] * kBlockDim, hi = lo + kBlockDim - 1;
+            if (opt.fixed_lo[a] > 0) d_block = std::min(d_block, float(lo - opt.fixed_lo[a]));
+            if (opt.fixed_hi[a] > 0) d_block = std::min(d_block, float(dims[a] - opt.fixed_hi[a] - 1 - hi));
+        }
+        if (d_block >= float(zone)) return;
+        float* P = s.at(0);
+        gather_phi(band.neighbourhood(std::size_t(b)), phi, P);
+        const std::size_t base = std::size_t(b) * kBlockVoxels;
+        for (int z = 0; z < kBlockDim; ++z)
+            for (int y = 0; y < kBlockDim; ++y)
+                for (int x = 0; x < kBlockDim; ++x) {
+                    const int p[3] = {bc[0] * kBlockDim + x, bc[1] * kBlockDim + y, bc[2] * kBlockDim + z};
+                    float d = 1e9f;
+                    for (int a = 0; a < 3; ++a) {
+                        if (opt.fixed_lo[a] > 0) d = std::min(d, float(p[a] - opt.fixed_lo[a]));
+                        if (opt.fixed_hi[a] > 0) d = std::min(d, float(dims[a] - opt.fixed_hi[a] - 1 - p[a]));
+                    }
+                    if (d >= float(zone)) continue;
+                    const float t = std::clamp(1.0f - d / float(zone), 0.0f, 1.0f);
+                    const int q = lidx(x, y, z);
+                    float g[3];
+                    for (int j = 0; j < 3; ++j) g[j] = 0.5f * (P[q + kStride[j]] - P[q - kStride[j]]);
+                    const float gl = std::sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+                    const std::size_t i = base + std::size_t(bidx(x, y, z));
+                    if (!(gl > 0) || std::abs(N[0][i]) > 1.5f) continue;
+                    float n[3], nl = 0;
+                    for (int j = 0; j < 3; ++j) {
+                        n[j] = (1 - t) * N[j][i] + t * g[j] / gl;
+                        nl += n[j] * n[j];
+                    }
+                    nl = std::sqrt(nl);
+                    if (nl > 0)
+                        for (int j = 0; j < 3; ++j) N[j][i] = n[j] / nl;
+                }
+    });
+}
+
+}  // namespace
+}  // namespace engine
 
 const char* to_string(SmoothMode mode) {
     switch (mode) {
@@ -78,6 +138,7 @@ void run(engine::Band& band, const SmoothOptions& opt, SmoothReport& rep, Progre
         if (filter) {
             const auto t0 = Clock::now();
             filter->filter_normals(c);
+            engine::relax_toward_border(band, opt);
             rep.seconds_normals += seconds_since(t0);
             const auto t1 = Clock::now();
             const bool keep = filter->preserves_volume(opt);
@@ -185,6 +246,7 @@ void validate_smooth_options(const SmoothOptions& opt, const std::string& who, c
     if (!(opt.active_band >= 1.5f && opt.active_band <= 5.0f))
         bad("active_band must be in [1.5, 5] voxels, got " + std::to_string(opt.active_band));
     if (opt.threads < 0) bad("threads must be >= 0, got " + std::to_string(opt.threads));
+    if (opt.fixed_zone < 0) bad("fixed_zone must be >= 0, got " + std::to_string(opt.fixed_zone));
 }
 
 // The defaults are the filter's rules (lib/normals/stages); mean curvature flow, which has no

@@ -136,6 +136,13 @@ struct SmoothOptions {
     /// its sides. 0: none (the grid's border is zero-flux).
     std::array<int, 3> fixed_lo{0, 0, 0};
     std::array<int, 3> fixed_hi{0, 0, 0};
+    /// >= 0, voxels: with a held border (fixed_lo, fixed_hi), a zone inside it that gives way gradually: before each
+    /// refit the filtered normals there are blended toward φ's own normals, wholly at the held layer and not at all
+    /// fixed_zone voxels from it, so the surface moves less the nearer it lies to the layer that does not move. Without
+    /// it the surface beside the held layer moves as far as anywhere (several voxels in one refit where the noise is
+    /// several voxels), |∇φ| grows in the few voxels between, and the refit's rate outruns its super steps: a window's
+    /// refit ran away there (fandisk_n0.3 at 512, bricks of 256, halo 128). 0: none.
+    int fixed_zone = 0;
     /// false: the last iteration leaves φ as its refit (and volume constraint) left it, the band where that
     /// iteration had it, not reinitialised: for a run in steps whose caller changes φ before the next step
     /// (smooth_in_bricks' volume constraint over the whole surface) and reinitialises it then

@@ -283,6 +283,45 @@ TEST(FastEngine, TheRefitsDecisionsReadFromDAndReplayedAreItsOwn) {
     EXPECT_EQ(replayed, 2);
 }
 
+// A held border (a brick's window) gives way over its zone: the surface beside the layer that does not move moves less
+// (the refit still carries the zone's pull inwards, as far as it reaches); the held layer itself stays as it was.
+TEST(FastEngine, AHeldBorderGivesWayOverItsZone) {
+    Volume v = make_volume(40, 1.0, box_sdf(Vec3d(20.3, 19.6, 20.2), Vec3d(11, 9, 10)));
+    add_noise(v, 0.6, 21u);
+    SmoothOptions o = bilateral(4.0f);
+    o.iterations = 1;
+    o.final_reinitialise = false;
+    o.reinitialise_input = false;  // φ as the refit leaves it, from the scan's
+    o.preserve_volume = false;
+    o.fixed_lo = {12, 0, 0};  // x < 12 held: the box's sides run on past it
+    Volume held = v, zoned = v;
+    smooth_volume(held, o);
+    o.fixed_zone = 8;
+    smooth_volume(zoned, o);
+    // the mean move of the samples within a voxel of the surface, by their distance from the held layer
+    const auto moved = [&](const Volume& after, int x0, int x1) {
+        double sum = 0;
+        int n = 0;
+        for (int k = 0; k < 40; ++k)
+            for (int j = 0; j < 40; ++j)
+                for (int i = x0; i < x1; ++i)
+                    if (std::abs(v.value(i, j, k)) < 1.0) {
+                        sum += std::abs(after.value(i, j, k) - v.value(i, j, k));
+                        ++n;
+                    }
+        return sum / std::max(n, 1);
+    };
+    EXPECT_EQ(moved(held, 0, 12), 0.0);
+    EXPECT_EQ(moved(zoned, 0, 12), 0.0);
+    const double next_held = moved(held, 12, 13), next_zoned = moved(zoned, 12, 13);
+    std::printf("beside the held layer: %.3f voxel held, %.3f with the zone; further on %.3f and %.3f\n", next_held,
+                next_zoned, moved(held, 24, 28), moved(zoned, 24, 28));
+    EXPECT_GT(next_held, 0.1);
+    EXPECT_LT(next_zoned, 0.7 * next_held);
+    o.fixed_zone = -1;
+    EXPECT_THROW(smooth_volume(zoned, o), InvalidInput);
+}
+
 TEST(FastEngine, NegativeSuperStepsAreRefused) {
     Volume v = make_volume(24, 1.0, sphere_sdf(Vec3d(12, 12, 12), 6.0));
     SmoothOptions o = bilateral(4.0f);
