@@ -247,6 +247,9 @@ void validate_smooth_options(const SmoothOptions& opt, const std::string& who, c
         bad("active_band must be in [1.5, 5] voxels, got " + std::to_string(opt.active_band));
     if (opt.threads < 0) bad("threads must be >= 0, got " + std::to_string(opt.threads));
     if (opt.fixed_zone < 0) bad("fixed_zone must be >= 0, got " + std::to_string(opt.fixed_zone));
+    if (opt.refit_replay_count < 0 || opt.refit_replay_count > kRefitSuperStepAttempts)
+        bad("refit_replay_count must be in [0, " + std::to_string(kRefitSuperStepAttempts) + "], got " +
+            std::to_string(opt.refit_replay_count));
 }
 
 // The defaults are the filter's rules (lib/normals/stages); mean curvature flow, which has no

@@ -281,6 +281,10 @@ TEST(FastEngine, TheRefitsDecisionsReadFromDAndReplayedAreItsOwn) {
     std::printf("%d runs replayed (%d restarts, %d stops)\n", replayed, restarts, stops);
     EXPECT_EQ(restarts, 2);
     EXPECT_EQ(replayed, 2);
+    Volume v = make_volume(24, 1.0, sphere_sdf(Vec3d(12, 12, 12), 6.0));
+    SmoothOptions o = bilateral(4.0f);
+    o.refit_replay_count = kRefitSuperStepAttempts + 1;
+    EXPECT_THROW(smooth_volume(v, o), InvalidInput);
 }
 
 // A held border (a brick's window) gives way over its zone: the surface beside the layer that does not move moves less
