@@ -293,9 +293,7 @@ BrickOutcome run_brick(const BrickContext& c, BrickJob job) {
 
 int brick_halo_voxels(const SmoothOptions& opt, int iterations) {
     const double ell = opt.length_scale > 0 ? opt.length_scale : kDefaultLengthScale;
-    const int refit_steps = opt.refit_max_steps > 0 ? opt.refit_max_steps : default_refit_steps(opt);
-    const double refit_time = double(refit_steps) * std::min(double(opt.refit_dt), 1.0 / 6.0);
-    double reach = 3.0 * std::sqrt(2.0 * refit_time);
+    double reach = 3.0 * std::sqrt(2.0 * refit_time(opt));
     if (is_neighbourhood_filter(opt.mode)) {
         reach += 2.0 * 2.0 * double(opt.sigma_spatial) * ell;
     } else if (opt.mode != SmoothMode::MeanCurvature) {

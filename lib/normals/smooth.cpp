@@ -44,27 +44,28 @@ void relax_toward_border(Band& band, const SmoothOptions& opt) {
     Field3& N = band.work().normals;
     const Samples& phi = band.phi();
     const auto dims = band.grid().dims;
+    // voxels from the held layer to the nearest of the samples lo <= (x, y, z) <= hi
+    const auto held_distance = [&](const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+        float d = 1e9f;
+        for (int a = 0; a < 3; ++a) {
+            if (opt.fixed_lo[a] > 0) d = std::min(d, float(lo[a] - opt.fixed_lo[a]));
+            if (opt.fixed_hi[a] > 0) d = std::min(d, float(dims[a] - opt.fixed_hi[a] - 1 - hi[a]));
+        }
+        return d;
+    };
     band.for_blocks(band.all_blocks(), 1, [&](std::size_t, std::int32_t b, Scratch& s) {
         const auto& bc = band.block_coord(std::size_t(b));
-        float d_block = 1e9f;  // a quick skip
-        for (int a = 0; a < 3; ++a) {
-            const int lo = bc[a] * kBlockDim, hi = lo + kBlockDim - 1;
-            if (opt.fixed_lo[a] > 0) d_block = std::min(d_block, float(lo - opt.fixed_lo[a]));
-            if (opt.fixed_hi[a] > 0) d_block = std::min(d_block, float(dims[a] - opt.fixed_hi[a] - 1 - hi));
-        }
-        if (d_block >= float(zone)) return;
+        const std::array<int, 3> first{bc[0] * kBlockDim, bc[1] * kBlockDim, bc[2] * kBlockDim};
+        const std::array<int, 3> last{first[0] + kBlockDim - 1, first[1] + kBlockDim - 1, first[2] + kBlockDim - 1};
+        if (held_distance(first, last) >= float(zone)) return;
         float* P = s.at(0);
         gather_phi(band.neighbourhood(std::size_t(b)), phi, P);
         const std::size_t base = std::size_t(b) * kBlockVoxels;
         for (int z = 0; z < kBlockDim; ++z)
             for (int y = 0; y < kBlockDim; ++y)
                 for (int x = 0; x < kBlockDim; ++x) {
-                    const int p[3] = {bc[0] * kBlockDim + x, bc[1] * kBlockDim + y, bc[2] * kBlockDim + z};
-                    float d = 1e9f;
-                    for (int a = 0; a < 3; ++a) {
-                        if (opt.fixed_lo[a] > 0) d = std::min(d, float(p[a] - opt.fixed_lo[a]));
-                        if (opt.fixed_hi[a] > 0) d = std::min(d, float(dims[a] - opt.fixed_hi[a] - 1 - p[a]));
-                    }
+                    const std::array<int, 3> p{first[0] + x, first[1] + y, first[2] + z};
+                    const float d = held_distance(p, p);
                     if (d >= float(zone)) continue;
                     const float t = std::clamp(1.0f - d / float(zone), 0.0f, 1.0f);
                     const int q = lidx(x, y, z);
