@@ -1,7 +1,15 @@
 // nf_bench_faces START GT [--guide MESH] [--rounds N] [--vsteps N] [--sigma-r S] [--sigma-s S] [--rings R] [--no-patch]
-//                [--own B] [--discrepancy D] [--trace N] [--out FILE]
+//                [--own B] [--discrepancy D] [--trace N [--sure EPS [--sure-normal-rounds K]
+//                [--sure-oracle-sigma]]] [--out FILE]
 // --trace N: N rounds one at a time, without guidance; after each, one line: the round, the vertices' RMS distance
 // from START and the noise estimate of the result (both over START's estimated noise), the face-by-face angle.
+// --sure EPS (with --trace): before the trace, the input's error along its vertex normals against GT (over the
+// estimated noise); with each round one more line, "sure ROUND ESTIMATE TRUE div/n D": Monte-Carlo SURE (Stein's
+// unbiased risk estimate; Ramani et al. 2008) of the vertices' RMS error along the normals, from a copy of START moved
+// by EPS times the noise along the normals with random signs, and the true RMS error against GT (both over the
+// estimated noise). --sure-normal-rounds K (3): the normals of START filtered K rounds (0: START's own).
+// --sure-oracle-sigma: SURE with the input's true error along the normals for the noise (an oracle, to tell the
+// estimator's bias from the noise estimate's).
 // --discrepancy D: rounds one at a time, without guidance, until the vertices moved D times START's estimated
 // noise (estimate_noise), at most 40: the rule of the kept mesh's default filter (KeepFilter::Faces) at D = 1.
 // The face filter of the kept mesh (fit/face_filter.h) on its own: START (e.g. a kept result, or the noisy
@@ -11,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -31,8 +40,9 @@ int main(int argc, char** argv) {
     const Mesh gt = read_mesh(argv[2]);
     FaceFilterOptions o;
     std::string guide_path, out;
-    double discrepancy = 0;
-    int trace = 0;
+    double discrepancy = 0, sure_eps = 0;
+    int trace = 0, sure_normal_rounds = 3;
+    bool sure_oracle_sigma = false;
     for (int i = 3; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has = i + 1 < argc;
@@ -56,6 +66,12 @@ int main(int argc, char** argv) {
             o.own_patch_bias = std::atof(argv[++i]);
         else if (a == "--out" && has)
             out = argv[++i];
+        else if (a == "--sure" && has)
+            sure_eps = std::atof(argv[++i]);
+        else if (a == "--sure-normal-rounds" && has)
+            sure_normal_rounds = std::atoi(argv[++i]);
+        else if (a == "--sure-oracle-sigma")
+            sure_oracle_sigma = true;
         else if (a == "--discrepancy" && has)
             discrepancy = std::atof(argv[++i]);
         else {
@@ -87,8 +103,54 @@ int main(int argc, char** argv) {
         const Mesh m0 = m;
         FaceFilterOptions d = o;
         d.normal_steps = 1;
+        // --sure EPS: Monte-Carlo SURE of the vertices' error along the input's vertex normals (Ramani et al. 2008):
+        // a copy of the input moved by EPS·noise·b (b = ±1 at random) along the normals runs the same rounds
+        Mesh mp = m;
+        double sure_sigma = noise;
+        std::vector<Vec3d> nrm(m.positions.size());
+        std::vector<double> b(m.positions.size());
+        if (sure_eps > 0) {
+            Mesh t = m;
+            if (sure_normal_rounds > 0) {  // the normals of a filtered copy: steadier than the noisy ones
+                FaceFilterOptions q = o;
+                q.normal_steps = sure_normal_rounds;
+                filter_faces(t, q);
+            }
+            compute_vertex_normals(t);
+            std::mt19937_64 rng(7);
+            for (std::size_t i = 0; i < nrm.size(); ++i) {
+                nrm[i] = normalized(Vec3d(t.normals[i]));
+                b[i] = (rng() & 1) ? 1.0 : -1.0;
+                mp.positions[i] = Vec3f(Vec3d(m.positions[i]) + sure_eps * noise * b[i] * nrm[i]);
+            }
+        }
+        if (sure_eps > 0) {
+            double truth = 0;
+            for (std::size_t i = 0; i < nrm.size(); ++i) {
+                const double ei = dot(Vec3d(m.positions[i]) - Vec3d(gt.positions[i]), nrm[i]);
+                truth += ei * ei;
+            }
+            std::printf("input: the error along the normals %.3f of the estimated noise\n",
+                        std::sqrt(truth / double(nrm.size())) / noise);
+            if (sure_oracle_sigma) sure_sigma = std::sqrt(truth / double(nrm.size()));
+        }
         for (int r = 1; r <= trace; ++r) {
             filter_faces(m, d);
+            if (sure_eps > 0) {
+                filter_faces(mp, d);
+                double res = 0, div = 0, truth = 0;
+                for (std::size_t i = 0; i < nrm.size(); ++i) {
+                    const double ri = dot(Vec3d(m.positions[i]) - Vec3d(m0.positions[i]), nrm[i]);
+                    res += ri * ri;
+                    div += b[i] * dot(Vec3d(mp.positions[i]) - Vec3d(m.positions[i]), nrm[i]) / (sure_eps * noise);
+                    const double ei = dot(Vec3d(m.positions[i]) - Vec3d(gt.positions[i]), nrm[i]);
+                    truth += ei * ei;
+                }
+                const double n = double(nrm.size()), s2 = sure_sigma * sure_sigma;
+                const double sure = res - n * s2 + 2 * s2 * div;
+                std::printf("sure %d %.4f %.4f div/n %.3f\n", r, std::sqrt(std::max(sure, 0.0) / n) / noise,
+                            std::sqrt(truth / n) / noise, div / n);
+            }
             double sum = 0;
             for (std::size_t i = 0; i < m.positions.size(); ++i) {
                 const Vec3d v = Vec3d(m.positions[i]) - Vec3d(m0.positions[i]);
