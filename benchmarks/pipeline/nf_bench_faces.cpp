@@ -1,6 +1,6 @@
 // nf_bench_faces START GT [--guide MESH] [--rounds N] [--vsteps N] [--sigma-r S] [--sigma-s S] [--rings R] [--no-patch]
 //                [--own B] [--discrepancy D] [--trace N [--sure EPS [--sure-normal-rounds K]
-//                [--sure-oracle-sigma]]] [--out FILE]
+//                [--sure-sigma S] [--sure-oracle-sigma]]] [--out FILE]
 // --trace N: N rounds one at a time, without guidance; after each, one line: the round, the vertices' RMS distance
 // from START and the noise estimate of the result (both over START's estimated noise), the face-by-face angle.
 // --sure EPS (with --trace): before the trace, the input's error along its vertex normals against GT (over the
@@ -8,7 +8,7 @@
 // unbiased risk estimate; Ramani et al. 2008) of the vertices' RMS error along the normals, from a copy of START moved
 // by EPS times the noise along the normals with random signs, and the true RMS error against GT (both over the
 // estimated noise). --sure-normal-rounds K (3): the normals of START filtered K rounds (0: START's own).
-// --sure-oracle-sigma: SURE with the input's true error along the normals for the noise (an oracle, to tell the
+// --sure-sigma S: SURE with the noise S (world units) instead of the estimate. --sure-oracle-sigma: SURE with the input's true error along the normals for the noise (an oracle, to tell the
 // estimator's bias from the noise estimate's).
 // --discrepancy D: rounds one at a time, without guidance, until the vertices moved D times START's estimated
 // noise (estimate_noise), at most 40: the rule of the kept mesh's default filter (KeepFilter::Faces) at D = 1.
@@ -43,6 +43,7 @@ int main(int argc, char** argv) {
     double discrepancy = 0, sure_eps = 0;
     int trace = 0, sure_normal_rounds = 3;
     bool sure_oracle_sigma = false;
+    double sure_sigma_given = 0;
     for (int i = 3; i < argc; ++i) {
         const std::string a = argv[i];
         const bool has = i + 1 < argc;
@@ -70,6 +71,8 @@ int main(int argc, char** argv) {
             sure_eps = std::atof(argv[++i]);
         else if (a == "--sure-normal-rounds" && has)
             sure_normal_rounds = std::atoi(argv[++i]);
+        else if (a == "--sure-sigma" && has)
+            sure_sigma_given = std::atof(argv[++i]);
         else if (a == "--sure-oracle-sigma")
             sure_oracle_sigma = true;
         else if (a == "--discrepancy" && has)
@@ -132,6 +135,7 @@ int main(int argc, char** argv) {
             }
             std::printf("input: the error along the normals %.3f of the estimated noise\n",
                         std::sqrt(truth / double(nrm.size())) / noise);
+            if (sure_sigma_given > 0) sure_sigma = sure_sigma_given;
             if (sure_oracle_sigma) sure_sigma = std::sqrt(truth / double(nrm.size()));
         }
         for (int r = 1; r <= trace; ++r) {
