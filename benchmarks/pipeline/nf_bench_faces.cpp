@@ -1,5 +1,5 @@
 // nf_bench_faces START GT [--guide MESH] [--rounds N] [--vsteps N] [--sigma-r S] [--sigma-s S] [--rings R] [--no-patch]
-//                [--own B] [--discrepancy D] [--trace N [--sure EPS [--sure-normal-rounds K]
+//                [--own B] [--discrepancy D | --risk | --sweep N] [--trace N [--sure EPS [--sure-normal-rounds K]
 //                [--sure-sigma S] [--sure-oracle-sigma]]] [--out FILE]
 // --trace N: N rounds one at a time, without guidance; after each, one line: the round, the vertices' RMS distance
 // from START and the noise estimate of the result (both over START's estimated noise), the face-by-face angle.
@@ -10,6 +10,10 @@
 // estimated noise). --sure-normal-rounds K (3): the normals of START filtered K rounds (0: START's own).
 // --sure-sigma S: SURE with the noise S (world units) instead of the estimate. --sure-oracle-sigma: SURE with the input's true error along the normals for the noise (an oracle, to tell the
 // estimator's bias from the noise estimate's).
+// --risk: as --discrepancy 1, with the risk stop instead (FaceFilterOptions::stop_noise, the noise estimated along
+// the steady normals).
+// --sweep N: for k = 1..N, k rounds from START in one run: "k angle error", the true RMS error along the steady
+// normals over the estimated noise (a multi-round run keeps σ_s of its start, where --trace restarts every round).
 // --discrepancy D: rounds one at a time, without guidance, until the vertices moved D times START's estimated
 // noise (estimate_noise), at most 40: the rule of the kept mesh's default filter (KeepFilter::Faces) at D = 1.
 // The face filter of the kept mesh (fit/face_filter.h) on its own: START (e.g. a kept result, or the noisy
@@ -42,7 +46,8 @@ int main(int argc, char** argv) {
     std::string guide_path, out;
     double discrepancy = 0, sure_eps = 0;
     int trace = 0, sure_normal_rounds = 3;
-    bool sure_oracle_sigma = false;
+    bool sure_oracle_sigma = false, risk = false;
+    int sweep = 0;
     double sure_sigma_given = 0;
     for (int i = 3; i < argc; ++i) {
         const std::string a = argv[i];
@@ -75,6 +80,10 @@ int main(int argc, char** argv) {
             sure_sigma_given = std::atof(argv[++i]);
         else if (a == "--sure-oracle-sigma")
             sure_oracle_sigma = true;
+        else if (a == "--sweep" && has)
+            sweep = std::atoi(argv[++i]);
+        else if (a == "--risk")
+            risk = true;
         else if (a == "--discrepancy" && has)
             discrepancy = std::atof(argv[++i]);
         else {
@@ -120,6 +129,10 @@ int main(int argc, char** argv) {
                 filter_faces(t, q);
             }
             compute_vertex_normals(t);
+            if (sure_normal_rounds < 0) {  // the steady normals (steady_vertex_normals) of the input
+                const std::vector<Vec3d> steady = steady_vertex_normals(m);
+                for (std::size_t i = 0; i < steady.size(); ++i) t.normals[i] = Vec3f(steady[i]);
+            }
             std::mt19937_64 rng(7);
             for (std::size_t i = 0; i < nrm.size(); ++i) {
                 nrm[i] = normalized(Vec3d(t.normals[i]));
@@ -152,8 +165,8 @@ int main(int argc, char** argv) {
                 }
                 const double n = double(nrm.size()), s2 = sure_sigma * sure_sigma;
                 const double sure = res - n * s2 + 2 * s2 * div;
-                std::printf("sure %d %.4f %.4f div/n %.3f\n", r, std::sqrt(std::max(sure, 0.0) / n) / noise,
-                            std::sqrt(truth / n) / noise, div / n);
+                std::printf("sure %d %.4f %.4f div/n %.4f res %.4f\n", r, std::sqrt(std::max(sure, 0.0) / n) / noise,
+                            std::sqrt(truth / n) / noise, div / n, res / n / s2);
             }
             double sum = 0;
             for (std::size_t i = 0; i < m.positions.size(); ++i) {
@@ -165,17 +178,39 @@ int main(int argc, char** argv) {
         }
         return 0;
     }
-    if (discrepancy > 0) {
+    if (sweep > 0) {
+        const int last = sweep;
+        const std::vector<Vec3d> steady = steady_vertex_normals(m);
+        const double noise = estimate_noise(m).sigma;
+        for (int k = 1; k <= last; ++k) {
+            Mesh t = m;
+            FaceFilterOptions d = o;
+            d.normal_steps = k;
+            filter_faces(t, d);
+            double truth = 0;
+            for (std::size_t i = 0; i < t.positions.size(); ++i) {
+                const double ei = dot(Vec3d(t.positions[i]) - Vec3d(gt.positions[i]), steady[i]);
+                truth += ei * ei;
+            }
+            std::printf("%d %.2f %.4f\n", k, correspondence_errors(t, gt).mean_face_angle_deg,
+                        std::sqrt(truth / double(t.positions.size())) / noise);
+        }
+        return 0;
+    }
+    if (discrepancy > 0 || risk) {
         FaceFilterOptions d = o;
         d.normal_steps = 40;
-        d.stop_displacement = discrepancy * estimate_noise(m).sigma;
+        if (risk)
+            d.stop_noise = estimate_noise(m, NoiseNormals::Steady).sigma;
+        else
+            d.stop_displacement = discrepancy * estimate_noise(m).sigma;
         Stopwatch c;
         std::vector<Vec3d> target;
         const FaceFilterReport r = filter_faces(m, d, nullptr, nullptr, &target);
         std::printf(
-            "discrepancy %.2f: %d rounds, %.2f deg, %.2f s, faces off their filtered normals %.2f deg, %zu reverted\n",
-            discrepancy, r.rounds, correspondence_errors(m, gt).mean_face_angle_deg, c.lap(), mean_angle(target, m),
-            r.reverted_moves);
+            "%s %.2f: %d rounds (%d run), %.2f deg, %.2f s, faces off their filtered normals %.2f deg, %zu reverted\n",
+            risk ? "risk" : "discrepancy", risk ? 1.0 : discrepancy, r.rounds, r.rounds_run,
+            correspondence_errors(m, gt).mean_face_angle_deg, c.lap(), mean_angle(target, m), r.reverted_moves);
         if (!out.empty()) write_mesh(out, m);
         return 0;
     }

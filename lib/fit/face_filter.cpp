@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <random>
+#include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -11,6 +13,7 @@
 
 #include "core/errors.h"
 #include "fit/weld.h"
+#include "metrics/noise.h"
 
 namespace normalflow {
 
@@ -37,10 +40,11 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
                               const std::vector<char>* held, std::vector<Vec3d>* filtered_normals) {
     if (o.normal_steps < 0 || o.vertex_steps < 0 || o.rings < 1 || !(o.sigma_r > 0) || !(o.sigma_s > 0) ||
         !std::isfinite(o.sigma_r) || !std::isfinite(o.sigma_s) || !(o.own_patch_bias > 0 && o.own_patch_bias <= 1) ||
-        !(o.stop_displacement >= 0) || !std::isfinite(o.stop_displacement))
+        !(o.stop_displacement >= 0) || !std::isfinite(o.stop_displacement) || !(o.stop_noise >= 0) ||
+        !std::isfinite(o.stop_noise) || (o.stop_displacement > 0 && o.stop_noise > 0))
         throw InvalidInput(
             "filter_faces: normal_steps and vertex_steps must be >= 0, rings >= 1, sigma_r and sigma_s finite and > 0, "
-            "own_patch_bias in (0, 1], stop_displacement finite and >= 0");
+            "own_patch_bias in (0, 1], stop_displacement and stop_noise finite and >= 0, not both > 0");
     check_mesh(m, "filter_faces");
     const std::size_t nf = m.triangles.size();
     if (guidance && guidance->size() != nf)
@@ -121,20 +125,36 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
     const Rows patch = build_rows(1);
     const Rows hood = o.rings == 1 ? patch : build_rows(o.rings);
 
-    std::vector<Vec3d> normal(nf), centre(nf), guide(nf), filtered(nf);
-    std::vector<double> area(nf, 0.0);
-    const auto measure = [&] {
+    // The state one run of the rounds changes: the vertices and what is measured from them. The risk stop runs a
+    // second, perturbed state in step with the first.
+    struct State {
+        std::vector<Vec3d> x, normal, centre, guide, filtered, base, next;
+        std::vector<double> area;
+        std::vector<char> revert;
+        std::size_t reverted = 0;
+    };
+    const auto make_state = [&](std::vector<Vec3d> positions) {
+        State st;
+        st.x = std::move(positions);
+        st.normal.resize(nf), st.centre.resize(nf), st.guide.resize(nf), st.filtered.resize(nf), st.base.resize(nf);
+        st.next.resize(n);
+        st.area.assign(nf, 0.0);
+        st.revert.assign(n, 0);
+        return st;
+    };
+    const auto measure = [&](State& st) {
         parallel(nf, [&](std::size_t f) {
             if (!live[f]) return;
-            const Vec3d &a = x[tri[f][0]], &b = x[tri[f][1]], &c = x[tri[f][2]];
+            const Vec3d &a = st.x[tri[f][0]], &b = st.x[tri[f][1]], &c = st.x[tri[f][2]];
             const Vec3d cr = cross(b - a, c - a);
             const double len = norm(cr);
-            area[f] = 0.5 * len;
-            normal[f] = len > 0 ? cr / len : Vec3d(0, 0, 0);
-            centre[f] = (a + b + c) / 3.0;
+            st.area[f] = 0.5 * len;
+            st.normal[f] = len > 0 ? cr / len : Vec3d(0, 0, 0);
+            st.centre[f] = (a + b + c) / 3.0;
         });
     };
-    measure();
+    State cur = make_state(std::move(x));
+    measure(cur);
     // σ_s: the mean distance between the centroids of faces that share a vertex
     double spacing = 0.0;
     {
@@ -144,7 +164,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             if (!live[f]) return;
             for (const std::uint32_t* k = patch.begin(f); k != patch.end(f); ++k)
                 if (*k != f) {
-                    per[f] += norm(centre[*k] - centre[f]);
+                    per[f] += norm(cur.centre[*k] - cur.centre[f]);
                     ++count[f];
                 }
         });
@@ -153,26 +173,19 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
         for (std::size_t f = 0; f < nf; ++f) sum += per[f], cnt += count[f];
         spacing = cnt ? sum / double(cnt) : 0.0;
     }
+    const auto write_back = [&](const std::vector<Vec3d>& positions) {
+        for (std::size_t i = 0; i < m.positions.size(); ++i) m.positions[i] = Vec3f(positions[group[i]]);
+    };
     if (!(spacing > 0) || rep.faces == 0) return rep;
     const double inv_s = 1.0 / (2.0 * std::pow(o.sigma_s * spacing, 2));
     const double inv_r = 1.0 / (2.0 * o.sigma_r * o.sigma_r);
 
-    std::vector<Vec3d> next(n), base(nf);
-    std::vector<char> revert(n, 0);
-    const std::vector<Vec3d> start = x;
-    // the vertices' root-mean-square distance from where they began (a sum in a fixed order: thread-independent)
-    const auto rms_displacement = [&] {
-        double sum = 0.0;
-        for (std::size_t i = 0; i < n; ++i) sum += dot(x[i] - start[i], x[i] - start[i]);
-        return std::sqrt(sum / double(n));
-    };
-    for (int round = 0; round < o.normal_steps; ++round) {
-        if (o.stop_displacement > 0 && rep.rms_displacement >= o.stop_displacement) break;
-        ++rep.rounds;
+    // One round: the guidance, the joint bilateral filter of the normals, the vertex update.
+    const auto round = [&](State& st) {
         // the normals the guidance is built from: the given ones, else the current ones
         parallel(nf, [&](std::size_t f) {
-            base[f] = normal[f];
-            if (guidance && norm((*guidance)[f]) > 0.5) base[f] = (*guidance)[f];
+            st.base[f] = st.normal[f];
+            if (guidance && norm((*guidance)[f]) > 0.5) st.base[f] = (*guidance)[f];
         });
         if (o.patch_guidance) {
             parallel(nf, [&](std::size_t f) {
@@ -181,17 +194,17 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
                 const auto mean_and_spread = [&](std::uint32_t j, Vec3d& mean) {
                     mean = Vec3d(0, 0, 0);
                     for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
-                        mean = mean + base[*k] * area[*k];
+                        mean = mean + st.base[*k] * st.area[*k];
                     const double len = norm(mean);
                     if (!(len > 0)) return std::numeric_limits<double>::infinity();
                     mean = mean / len;
                     double spread = 0.0;
                     for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
-                        if (area[*k] > 0) spread = std::max(spread, norm(base[*k] - mean));
+                        if (st.area[*k] > 0) spread = std::max(spread, norm(st.base[*k] - mean));
                     return spread;
                 };
                 // the face's own patch first: another one wins only if clearly more consistent
-                Vec3d chosen = base[f], mean;
+                Vec3d chosen = st.base[f], mean;
                 double best = std::numeric_limits<double>::infinity();
                 if (const double own = mean_and_spread(std::uint32_t(f), mean); own < best) {
                     best = own * o.own_patch_bias;
@@ -203,64 +216,143 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
                             best = spread;
                             chosen = mean;
                         }
-                guide[f] = chosen;
+                st.guide[f] = chosen;
             });
         } else {
-            guide = base;
+            st.guide = st.base;
         }
         // joint bilateral filter of the normals
         parallel(nf, [&](std::size_t f) {
             if (!live[f]) return;
             Vec3d sum(0, 0, 0);
             for (const std::uint32_t* k = hood.begin(f); k != hood.end(f); ++k) {
-                const Vec3d d = centre[*k] - centre[f];
-                const Vec3d g = guide[*k] - guide[f];
-                sum = sum + normal[*k] * (area[*k] * std::exp(-dot(d, d) * inv_s - dot(g, g) * inv_r));
+                const Vec3d d = st.centre[*k] - st.centre[f];
+                const Vec3d g = st.guide[*k] - st.guide[f];
+                sum = sum + st.normal[*k] * (st.area[*k] * std::exp(-dot(d, d) * inv_s - dot(g, g) * inv_r));
             }
             const double len = norm(sum);
-            filtered[f] = len > 0 ? sum / len : normal[f];
+            st.filtered[f] = len > 0 ? sum / len : st.normal[f];
         });
         // vertex update toward the filtered normals; no face turns over
         for (int s = 0; s < o.vertex_steps; ++s) {
             parallel(n, [&](std::size_t i) {
-                next[i] = x[i];
+                st.next[i] = st.x[i];
                 if (fixed[i] || vf.size(i) == 0) return;
                 Vec3d sum(0, 0, 0);
                 for (const std::uint32_t* k = vf.begin(i); k != vf.end(i); ++k) {
                     const auto& t = tri[*k];
-                    const Vec3d c = (x[t[0]] + x[t[1]] + x[t[2]]) / 3.0;
-                    sum = sum + filtered[*k] * dot(filtered[*k], c - x[i]);
+                    const Vec3d c = (st.x[t[0]] + st.x[t[1]] + st.x[t[2]]) / 3.0;
+                    sum = sum + st.filtered[*k] * dot(st.filtered[*k], c - st.x[i]);
                 }
-                next[i] = x[i] + sum / double(vf.size(i));
+                st.next[i] = st.x[i] + sum / double(vf.size(i));
             });
             for (;;) {  // each pass undoes at least one move, so this ends
-                std::fill(revert.begin(), revert.end(), 0);
+                std::fill(st.revert.begin(), st.revert.end(), 0);
                 bool any = false;
                 for (std::size_t f = 0; f < nf; ++f) {
                     if (!live[f]) continue;
                     const auto& t = tri[f];
                     // against the given guidance where there is one (the volume's side of the surface)
-                    const Vec3d& ref = base[f];
-                    const Vec3d cr = cross(next[t[1]] - next[t[0]], next[t[2]] - next[t[0]]);
-                    const Vec3d was = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]);
+                    const Vec3d& ref = st.base[f];
+                    const Vec3d cr = cross(st.next[t[1]] - st.next[t[0]], st.next[t[2]] - st.next[t[0]]);
+                    const Vec3d was = cross(st.x[t[1]] - st.x[t[0]], st.x[t[2]] - st.x[t[0]]);
                     // a face already turned is not this move's doing
                     const bool turns = (dot(was, ref) > 0 && dot(cr, ref) <= 0) ||
-                                       (dot(was, filtered[f]) > 0 && dot(cr, filtered[f]) <= 0);
+                                       (dot(was, st.filtered[f]) > 0 && dot(cr, st.filtered[f]) <= 0);
                     if (!turns) continue;
                     for (std::uint32_t a : t)
-                        if (next[a] != x[a]) revert[a] = 1, any = true;
+                        if (st.next[a] != st.x[a]) st.revert[a] = 1, any = true;
                 }
                 if (!any) break;
                 for (std::size_t i = 0; i < n; ++i)
-                    if (revert[i]) next[i] = x[i], ++rep.reverted_moves;
+                    if (st.revert[i]) st.next[i] = st.x[i], ++st.reverted;
             }
-            x.swap(next);
+            st.x.swap(st.next);
         }
-        measure();
-        rep.rms_displacement = rms_displacement();
+        measure(st);
+    };
+
+    const std::vector<Vec3d> start = cur.x;
+    // the vertices' root-mean-square distance from where they began (a sum in a fixed order: thread-independent)
+    const auto rms_displacement = [&](const std::vector<Vec3d>& at) {
+        double sum = 0.0;
+        for (std::size_t i = 0; i < n; ++i) sum += dot(at[i] - start[i], at[i] - start[i]);
+        return std::sqrt(sum / double(n));
+    };
+    if (o.stop_noise > 0) {
+        // Stein's unbiased risk estimate of the vertices' squared error along the steady normals N after k rounds,
+        // for noise of deviation σ along them: |r_k|² − nσ² + 2σ² div_k, r_k the vertices' moves along N, div_k the
+        // divergence of the rounds, by Monte Carlo (Ramani et al. 2008): kRiskProbes copies of the input, each moved by
+        // ε σ b_i N_i (b_i = ±1 at random, a fixed seed), run the same rounds; div_k ≈ mean of Σ b_i (x'_i − x_i)·N_i / εσ.
+        std::vector<Vec3d> area_normal(n, Vec3d(0, 0, 0));
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+        edges.reserve(3 * nf);
+        for (std::size_t f = 0; f < nf; ++f) {
+            if (!live[f]) continue;
+            for (int e = 0; e < 3; ++e) {
+                area_normal[tri[f][std::size_t(e)]] += cur.normal[f] * cur.area[f];
+                const std::uint32_t a = tri[f][std::size_t(e)], b = tri[f][std::size_t((e + 1) % 3)];
+                edges.emplace_back(std::min(a, b), std::max(a, b));
+            }
+        }
+        std::sort(edges.begin(), edges.end());
+        edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+        const std::vector<Vec3d> N = steady_vertex_normals(area_normal, edges);
+        const double sigma = o.stop_noise, probe = kRiskProbe * sigma;
+        std::mt19937_64 rng(0x5EED5u);
+        std::vector<std::vector<double>> sign{std::size_t(kRiskProbes), std::vector<double>(n, 0.0)};
+        std::vector<State> perturbed;
+        for (auto& sg : sign) {
+            for (std::size_t i = 0; i < n; ++i) sg[i] = (rng() >> 63) ? 1.0 : -1.0;
+            std::vector<Vec3d> moved = start;
+            for (std::size_t i = 0; i < n; ++i) moved[i] += N[i] * (probe * sg[i]);
+            perturbed.push_back(make_state(std::move(moved)));
+            measure(perturbed.back());
+        }
+        const auto risk = [&] {  // sums in a fixed order: thread-independent
+            double residual = 0.0, divergence = 0.0;
+            for (std::size_t i = 0; i < n; ++i) {
+                const double r = dot(cur.x[i] - start[i], N[i]);
+                residual += r * r;
+            }
+            for (std::size_t p = 0; p < perturbed.size(); ++p)
+                for (std::size_t i = 0; i < n; ++i)
+                    divergence += sign[p][i] * dot(perturbed[p].x[i] - cur.x[i], N[i]) / probe;
+            divergence /= double(perturbed.size());
+            return residual - double(n) * sigma * sigma + 2.0 * sigma * sigma * divergence;
+        };
+        double least = risk();  // no round at all: about nσ²
+        std::vector<Vec3d> kept = cur.x, kept_filtered = cur.normal;
+        for (int k = 1; k <= o.normal_steps; ++k) {
+            round(cur);
+            for (State& st : perturbed) round(st);
+            ++rep.rounds_run;
+            if (const double r = risk(); r < least) {
+                least = r;
+                rep.rounds = k;
+                kept = cur.x;
+                kept_filtered = cur.filtered;
+            } else if (k - rep.rounds >= kRiskPatience) {
+                break;
+            }
+        }
+        rep.reverted_moves = cur.reverted;
+        rep.estimated_error = std::sqrt(std::max(least, 0.0) / double(n));
+        rep.rms_displacement = rms_displacement(kept);
+        write_back(kept);
+        if (filtered_normals) *filtered_normals = kept_filtered;
+        return rep;
     }
-    for (std::size_t i = 0; i < m.positions.size(); ++i) m.positions[i] = Vec3f(x[group[i]]);
-    if (filtered_normals) *filtered_normals = filtered;
+    for (int k = 0; k < o.normal_steps; ++k) {
+        if (o.stop_displacement > 0 && rep.rms_displacement >= o.stop_displacement) break;
+        round(cur);
+        ++rep.rounds;
+        rep.rms_displacement = rms_displacement(cur.x);
+    }
+    rep.rounds_run = rep.rounds;
+    rep.reverted_moves = cur.reverted;
+    write_back(cur.x);
+    if (filtered_normals) *filtered_normals = cur.filtered;
     return rep;
 }
 

@@ -80,7 +80,43 @@ double mean_edge_length(const Mesh& m) {
     return mean_length(w, unique_edges(w));
 }
 
-NoiseEstimate estimate_noise(const Mesh& m) {
+std::vector<Vec3d> steady_vertex_normals(const std::vector<Vec3d>& area_normal,
+                                         const std::vector<std::pair<std::uint32_t, std::uint32_t>>& edges) {
+    std::vector<Vec3d> n(area_normal.size()), sum(area_normal.size());
+    const auto unit = [](const Vec3d& v) {
+        const double len = norm(v);
+        return len > 0 ? v / len : Vec3d(0, 0, 0);
+    };
+    for (std::size_t v = 0; v < n.size(); ++v) n[v] = unit(area_normal[v]);
+    for (int pass = 0; pass < 2; ++pass) {
+        sum = n;
+        for (const auto& [a, b] : edges) sum[a] += n[b], sum[b] += n[a];
+        for (std::size_t v = 0; v < n.size(); ++v) n[v] = unit(sum[v]);
+    }
+    return n;
+}
+
+std::vector<Vec3d> steady_vertex_normals(const Mesh& m) {
+    const std::size_t n = m.positions.size();
+    std::vector<Vec3d> area(n, Vec3d(0, 0, 0));
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+    edges.reserve(3 * m.triangles.size());
+    for (const Tri& t : m.triangles) {
+        if (t[0] >= n || t[1] >= n || t[2] >= n)
+            throw InvalidInput("steady_vertex_normals: a triangle's index is out of range");
+        const Vec3d a = face_area_vector(m, t);
+        for (std::size_t k = 0; k < 3; ++k) {
+            area[t[k]] += a;
+            const std::uint32_t p = t[k], q = t[(k + 1) % 3];
+            if (p != q) edges.emplace_back(std::min(p, q), std::max(p, q));
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    return steady_vertex_normals(area, edges);
+}
+
+NoiseEstimate estimate_noise(const Mesh& m, NoiseNormals along) {
     const Mesh w = weld_exact(m);
     NoiseEstimate r;
     const std::size_t nv = w.positions.size();
@@ -119,15 +155,19 @@ NoiseEstimate estimate_noise(const Mesh& m) {
         for (const auto& [a, b] : unique) nb[fill[a]++] = b, nb[fill[b]++] = a;
     }
     const auto k = [&](std::size_t v) { return double(start[v + 1] - start[v]); };
-    // δ_v: the umbrella offset along the normal, where v is interior with 3 or more neighbours
+    // δ_v: the umbrella offset along the vertex's normal, where v is interior with 3 or more neighbours
+    if (along == NoiseNormals::Steady)
+        normal = steady_vertex_normals(normal, unique);
+    else
+        for (Vec3d& n : normal)
+            if (const double len = norm(n); len > 0) n = n / len;
     std::vector<double> offset(nv, 0.0);
     std::vector<char> measured(nv, 0);
     for (std::size_t v = 0; v < nv; ++v) {
-        const double len = norm(normal[v]);
-        if (boundary[v] || k(v) < 3 || !(len > 0)) continue;
+        if (boundary[v] || k(v) < 3 || !(norm(normal[v]) > 0)) continue;
         Vec3d c(0, 0, 0);
         for (std::uint32_t i = start[v]; i < start[v + 1]; ++i) c += Vec3d(w.positions[nb[i]]);
-        offset[v] = dot(Vec3d(w.positions[v]) - c / k(v), normal[v] / len);
+        offset[v] = dot(Vec3d(w.positions[v]) - c / k(v), normal[v]);
         measured[v] = 1;
     }
     // Δ_v = δ_v − mean of the neighbours' δ, where v and its neighbours are measured; its response to unit white

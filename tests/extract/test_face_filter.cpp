@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -195,6 +197,92 @@ TEST(FaceFilter, RoundsStopOnceTheVerticesMovedAsFarAsTheNoise) {
     EXPECT_THROW(filter_faces(again, o), InvalidInput);
     o.stop_displacement = INFINITY;
     EXPECT_THROW(filter_faces(again, o), InvalidInput);
+    // the risk stop: finite, >= 0, not with the discrepancy stop
+    o.stop_displacement = 0;
+    o.stop_noise = -1;
+    EXPECT_THROW(filter_faces(again, o), InvalidInput);
+    o.stop_noise = INFINITY;
+    EXPECT_THROW(filter_faces(again, o), InvalidInput);
+    o.stop_noise = sigma;
+    o.stop_displacement = sigma;
+    EXPECT_THROW(filter_faces(again, o), InvalidInput);
+}
+
+/// The RMS distance of m's vertices from the clean mesh's (same vertices), and its part along the clean normals.
+double rms_error(const Mesh& m, const Mesh& clean) {
+    double sum = 0;
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        const Vec3d d = Vec3d(m.positions[i]) - Vec3d(clean.positions[i]);
+        sum += dot(d, d);
+    }
+    return std::sqrt(sum / double(m.positions.size()));
+}
+
+/// A sphere with bumps of amplitude a (radius 1 ± a, about six bumps around): detail that rounds erode.
+Mesh bumpy_sphere(double a) {
+    Mesh m = test::icosphere(1.0, 4);
+    for (Vec3f& p : m.positions) {
+        const Vec3d u = normalized(Vec3d(p));
+        p = Vec3f(u * (1.0 + a * std::sin(6 * u.x) * std::sin(6 * u.y) * std::sin(6 * u.z)));
+    }
+    return m;
+}
+
+TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
+    // Stein's unbiased risk estimate reads the vertices' error without the clean mesh. On a noisy cube (flat sides:
+    // the error falls for many rounds) and a noisy bumpy sphere (rounds erode the bumps: the error turns), the round
+    // it keeps is within a few percent of the least true error of the rounds it ran, the same mesh as that many
+    // rounds alone make, and its estimate of the squared error is within a tenth of the noise's variance.
+    struct Case {
+        Mesh clean;
+        bool turns;  // the true error has its least before the rounds run out
+    };
+    for (const Case& c : {Case{test::subdivided_cube(16), false}, Case{bumpy_sphere(0.06), true}}) {
+        Mesh noisy = c.clean;
+        NoiseOptions n;
+        n.sigma = 0.3;
+        const double truth = add_noise(noisy, n).sigma_world;
+        const double sigma = estimate_noise(noisy, NoiseNormals::Steady).sigma;
+        FaceFilterOptions o;
+        o.normal_steps = 30;
+        o.stop_noise = sigma;
+        Mesh risk = noisy;
+        const FaceFilterReport r = filter_faces(risk, o);
+        ASSERT_GE(r.rounds, 1);
+        EXPECT_EQ(r.rounds_run, std::min(30, r.rounds + kRiskPatience));
+        // the true error of every round the run saw, each from the start
+        double least = INFINITY;
+        int least_round = 0;
+        for (int k = 1; k <= r.rounds_run; ++k) {
+            FaceFilterOptions plain = o;
+            plain.stop_noise = 0;
+            plain.normal_steps = k;
+            Mesh m = noisy;
+            filter_faces(m, plain);
+            if (k == r.rounds) {
+                EXPECT_EQ(m.positions, risk.positions);  // the kept round's mesh, as k rounds alone make it
+            }
+            if (const double e = rms_error(m, c.clean); e < least) least = e, least_round = k;
+        }
+        const double kept = rms_error(risk, c.clean);
+        std::printf(
+            "risk: %d of %d rounds (least true error at %d), error %.4f against the least %.4f, estimate "
+            "%.4f, noise %.4f\n",
+            r.rounds, r.rounds_run, least_round, kept, least, r.estimated_error, truth);
+        EXPECT_LT(kept, 1.05 * least);
+        EXPECT_NEAR(r.estimated_error * r.estimated_error, kept * kept, 0.1 * truth * truth);
+        if (c.turns) {
+            EXPECT_LT(least_round, 30);
+            EXPECT_LT(r.rounds_run, 30);  // it stopped on its own
+        }
+        // thread-independent
+        Mesh one = noisy;
+        {
+            const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+            EXPECT_EQ(filter_faces(one, o).rounds, r.rounds);
+        }
+        EXPECT_EQ(one.positions, risk.positions);
+    }
 }
 
 TEST(FaceFilter, BadInput) {
