@@ -266,7 +266,7 @@ std::vector<OptionSpec> make_table() {
                   "keep (volume, fit): vertex-update iterations turning the faces to the result's normals"), 0, 100000),
         choices(row("keep-filter", "pipeline.keep_filter", G::OutputMesh, T::Advanced, S,
                     [](RunOptions& o) -> auto& { return o.pipeline.keep_filter; },
-                    "keep: faces: the input's own faces filtered until the vertices moved as far as its noise; "
+                    "keep: faces: the input's own faces filtered for the rounds of least estimated error (SURE); "
                     "volume: the vertices fitted to the smoothed volume, then its normals guide the face filter; "
                     "fit: the fit alone"),
                 names({KeepFilter::Faces, KeepFilter::Volume, KeepFilter::Fit})),

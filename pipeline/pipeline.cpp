@@ -217,7 +217,7 @@ Volume scan_and_smooth_in_bricks(const ScanInput& in, const Mesh& input, Pipelin
                                  const SmoothCheckpoint* checkpoint, const BrickMessageRunner* remote) {
     const Mesh& mesh = *in.mesh;
     const Grid grid = scan_grid(mesh, r.scan_options);
-    const double noise = estimate_noise(input).sigma;
+    const double noise = estimate_noise(input, NoiseNormals::Steady).sigma;
     const SmoothOptions so = engine_options(in.o, grid.voxel_size, model_length_scale(input), noise, &r);
     std::unique_ptr<WindingNumber> wn;
     if (r.scan_options.shell_thickness == 0 && !remote) wn = std::make_unique<WindingNumber>(mesh);
@@ -708,7 +708,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         // The guard's volume alone: it tells which side of the surface a face looks to, by a gradient over two voxels
         // that the noise cannot turn once a voxel is twice the noise (the automatic resolution puts 0.6 to 1.1 of the
         // scans' noise in a voxel); it need not be finer than that.
-        r.noise = estimate_noise(m).sigma;
+        r.noise = estimate_noise(m, NoiseNormals::Steady).sigma;
         const double longest = bounding_box(m).longest_side();
         const int automatic_resolution = auto_resolution(m, scan);
         scan.scan.resolution = automatic_resolution;
@@ -819,16 +819,17 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         check_output(result.mesh, r, true, !r.trimmed);
         return result;
     }
-    // The kept mesh's face filter. Own faces: the input's, filtered until the vertices moved as far as its noise (the
-    // mesh's detail is the input's, at its own resolution, where the grid would round it over a voxel). Volume: the
+    // The kept mesh's face filter. Own faces: the input's, filtered for as many rounds as leave the least error by
+    // Stein's unbiased risk estimate for its noise (the mesh's detail is the input's, at its own resolution, where
+    // the grid would round it over a voxel). Volume: the
     // fitted mesh's, guided by the volume's normals (creases as sharp as the input's tessellation allows).
     FaceFilterOptions faces = o.faces;
     if (own_faces) {
         result.mesh = m;
         // smooth_volume_stage measured it when the engine ran, or the guard's resolution; otherwise it is measured here
-        if (!r.smoothed && r.noise == 0) r.noise = estimate_noise(m).sigma;
-        faces.stop_displacement = r.noise;
-        if (faces.normal_steps == 0) faces.normal_steps = faces.stop_displacement > 0 ? kMaxFaceRounds : 0;
+        if (!r.smoothed && r.noise == 0) r.noise = estimate_noise(m, NoiseNormals::Steady).sigma;
+        faces.stop_noise = r.noise;
+        if (faces.normal_steps == 0) faces.normal_steps = faces.stop_noise > 0 ? kMaxFaceRounds : 0;
     } else {
         result.mesh = std::move(fitted);
         if (o.keep_filter == KeepFilter::Fit)
@@ -921,8 +922,8 @@ Volume smooth_mesh_to_volume(const Mesh& m, const PipelineOptions& o, PipelineRe
 
 void smooth_volume_stage(Volume& v, const PipelineOptions& o, const Mesh& input, PipelineReport* report,
                          Progress* progress, NormalMap* normal_map, const SmoothCheckpoint* checkpoint) {
-    smooth_volume_stage(v, o, model_length_scale(input), estimate_noise(input).sigma, report, progress, normal_map,
-                        checkpoint);
+    smooth_volume_stage(v, o, model_length_scale(input), estimate_noise(input, NoiseNormals::Steady).sigma, report,
+                        progress, normal_map, checkpoint);
 }
 
 PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress* progress, bool want_mesh,

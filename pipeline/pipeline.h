@@ -73,8 +73,9 @@ const char* to_string(Connectivity c);
 /// How a kept mesh is smoothed.
 enum class KeepFilter {
     /// The input's own faces filtered (filter_faces): each face's normal over its neighbours, guided by its
-    /// most consistent patch, the vertices following, round after round until they have moved as far as
-    /// the input's noise (estimate_noise; Morozov's discrepancy principle), at most kMaxFaceRounds. The
+    /// most consistent patch, the vertices following, for the rounds that leave the least error by Stein's
+    /// unbiased risk estimate for the input's noise (FaceFilterOptions::stop_noise; estimate_noise along
+    /// steady normals), at most kMaxFaceRounds. The
     /// smoothed volume decides Auto's keep on a closed input; the volume guards the result against faces that
     /// turn over or intersect. On an open input (kept under Keep or Auto alike, no decision needed) the engine
     /// does not run: the guard's volume is the input's own distance.
@@ -192,8 +193,8 @@ struct PipelineOptions {
     /// How a kept mesh is smoothed: its own faces filtered (the default), or fitted to the volume.
     KeepFilter keep_filter = KeepFilter::Faces;
     /// The kept mesh's face filter (filter_faces). faces.normal_steps: the most rounds; 0 (the default) is
-    /// kMaxFaceRounds for KeepFilter::Faces (which stops at the input's noise) and 1 for KeepFilter::Volume.
-    /// faces.stop_displacement is set from the input's noise (KeepFilter::Faces).
+    /// kMaxFaceRounds for KeepFilter::Faces (which stops by the risk estimate) and 1 for KeepFilter::Volume.
+    /// faces.stop_noise is set from the input's noise (KeepFilter::Faces).
     FaceFilterOptions faces{.normal_steps = 0};
     /// Turn the kept mesh's faces to the engine's last filtered normal map (smooth_volume's normal_map)
     /// rather than to ∇φ of the result.

@@ -208,6 +208,8 @@ Json to_json(const PipelineReport& r) {
         j.set("face_filter", Json::object()
                                  .set("faces", r.faces.faces)
                                  .set("rounds", r.faces.rounds)
+                                 .set("rounds_run", r.faces.rounds_run)
+                                 .set("estimated_error", r.faces.estimated_error)
                                  .set("rms_displacement", r.faces.rms_displacement)
                                  .set("reverted_moves", r.faces.reverted_moves)
                                  .set("restored", r.fit_restored));

@@ -163,14 +163,15 @@ TEST(KeptFaces, ASphereDoesNotDriftAndHeavyNoiseTurnsNoFaceOver) {
     add_noise(noisy, n);
     const PipelineResult result = smooth_mesh(noisy, kept());
     const Mesh& round = result.mesh;
-    // the own faces filtered (no fit to the volume), round after round until the vertices moved as far as the
-    // input's noise: the last round crossed it
+    // the own faces filtered (no fit to the volume) for the rounds of least estimated error (SURE), at most
+    // kMaxFaceRounds: the error it estimates is a fraction of the noise, and the vertices moved about as far as it
     EXPECT_FALSE(result.report.fitted);
     ASSERT_TRUE(result.report.faces_filtered);
     EXPECT_GT(result.report.faces.rounds, 1);
-    EXPECT_LT(result.report.faces.rounds, kMaxFaceRounds);
+    EXPECT_LE(result.report.faces.rounds_run, kMaxFaceRounds);
     EXPECT_GT(result.report.noise, 0.0);
-    EXPECT_GE(result.report.faces.rms_displacement, result.report.noise);
+    EXPECT_LT(result.report.faces.estimated_error, 0.5 * result.report.noise);
+    EXPECT_GT(result.report.faces.rms_displacement, 0.8 * result.report.noise);
     EXPECT_NEAR(mesh_report(round).volume, mesh_report(sphere).volume, 0.005 * mesh_report(sphere).volume);
     double radius = 0;
     for (const Vec3f& p : round.positions) radius += norm(Vec3d(p));
@@ -231,8 +232,10 @@ TEST(KeptFaces, TheEngineRunsOnlyWhereItsSurfaceIsUsed) {
     const PipelineResult faces = smooth_mesh(open, o);
     EXPECT_FALSE(faces.report.smoothed);
     EXPECT_EQ(faces.report.seconds.smooth, 0.0);
-    EXPECT_DOUBLE_EQ(faces.report.noise, estimate_noise(open).sigma);  // the stop still follows the noise
-    EXPECT_GE(faces.report.faces.rms_displacement, faces.report.noise);
+    // the stop still follows the noise
+    EXPECT_DOUBLE_EQ(faces.report.noise, estimate_noise(open, NoiseNormals::Steady).sigma);
+    EXPECT_GT(faces.report.faces.rounds, 0);
+    EXPECT_LT(faces.report.faces.estimated_error, faces.report.noise);
     PipelineOptions other = o;
     other.smooth.iterations = 3;
     other.smooth.sigma_spatial = 0.5;
@@ -368,7 +371,7 @@ TEST(NoiseScale, SmoothMeshRunsWithTwiceTheMeasuredNoise) {
         const NoiseReport added = add_noise(noisy, n);
         const PipelineResult r = smooth_mesh(noisy, o);
         EXPECT_NEAR(r.report.noise, added.sigma_world, 0.1 * added.sigma_world) << sigma;
-        EXPECT_DOUBLE_EQ(r.report.noise, estimate_noise(noisy).sigma);
+        EXPECT_DOUBLE_EQ(r.report.noise, estimate_noise(noisy, NoiseNormals::Steady).sigma);
         ASSERT_LT(r.report.scan.grid.voxel_size, 0.25 * r.report.length_scale);
         const double expected = std::min(2.0 * r.report.noise / r.report.length_scale, kMaxAutoSigmaSpatial);
         EXPECT_NEAR(r.report.sigma_spatial, expected, 1e-6) << sigma;
