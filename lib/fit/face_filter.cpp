@@ -128,18 +128,20 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
     // The state one run of the rounds changes: the vertices and what is measured from them. The risk stop runs a
     // second, perturbed state in step with the first.
     struct State {
-        std::vector<Vec3d> x, normal, centre, guide, filtered, base, next;
-        std::vector<double> area;
-        std::vector<char> revert;
+        std::vector<Vec3d> x, normal, centre, guide, filtered, base, next, mean;
+        std::vector<double> area, spread;
+        std::vector<char> revert, turns;
         std::size_t reverted = 0;
     };
     const auto make_state = [&](std::vector<Vec3d> positions) {
         State st;
         st.x = std::move(positions);
         st.normal.resize(nf), st.centre.resize(nf), st.guide.resize(nf), st.filtered.resize(nf), st.base.resize(nf);
+        st.mean.resize(nf), st.spread.resize(nf);
         st.next.resize(n);
         st.area.assign(nf, 0.0);
         st.revert.assign(n, 0);
+        st.turns.assign(nf, 0);
         return st;
     };
     const auto measure = [&](State& st) {
@@ -188,34 +190,37 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             if (guidance && norm((*guidance)[f]) > 0.5) st.base[f] = (*guidance)[f];
         });
         if (o.patch_guidance) {
+            // each face's patch: its area-weighted mean base normal and its spread (the largest distance from it);
+            // infinite where the mean has no direction
+            parallel(nf, [&](std::size_t j) {
+                st.spread[j] = std::numeric_limits<double>::infinity();
+                if (!live[j]) return;
+                Vec3d mean(0, 0, 0);
+                for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
+                    mean = mean + st.base[*k] * st.area[*k];
+                const double len = norm(mean);
+                if (!(len > 0)) return;
+                mean = mean / len;
+                st.mean[j] = mean;
+                double spread = 0.0;
+                for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
+                    if (st.area[*k] > 0) spread = std::max(spread, norm(st.base[*k] - mean));
+                st.spread[j] = spread;
+            });
             parallel(nf, [&](std::size_t f) {
                 if (!live[f]) return;
-                // a patch's area-weighted mean base normal and its spread (the largest distance from it)
-                const auto mean_and_spread = [&](std::uint32_t j, Vec3d& mean) {
-                    mean = Vec3d(0, 0, 0);
-                    for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
-                        mean = mean + st.base[*k] * st.area[*k];
-                    const double len = norm(mean);
-                    if (!(len > 0)) return std::numeric_limits<double>::infinity();
-                    mean = mean / len;
-                    double spread = 0.0;
-                    for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
-                        if (st.area[*k] > 0) spread = std::max(spread, norm(st.base[*k] - mean));
-                    return spread;
-                };
                 // the face's own patch first: another one wins only if clearly more consistent
-                Vec3d chosen = st.base[f], mean;
+                Vec3d chosen = st.base[f];
                 double best = std::numeric_limits<double>::infinity();
-                if (const double own = mean_and_spread(std::uint32_t(f), mean); own < best) {
+                if (const double own = st.spread[f]; own < best) {
                     best = own * o.own_patch_bias;
-                    chosen = mean;
+                    chosen = st.mean[f];
                 }
                 for (const std::uint32_t* j = patch.begin(f); j != patch.end(f); ++j)
-                    if (*j != f)
-                        if (const double spread = mean_and_spread(*j, mean); spread < best) {
-                            best = spread;
-                            chosen = mean;
-                        }
+                    if (*j != f && st.spread[*j] < best) {
+                        best = st.spread[*j];
+                        chosen = st.mean[*j];
+                    }
                 st.guide[f] = chosen;
             });
         } else {
@@ -247,22 +252,24 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
                 st.next[i] = st.x[i] + sum / double(vf.size(i));
             });
             for (;;) {  // each pass undoes at least one move, so this ends
-                std::fill(st.revert.begin(), st.revert.end(), 0);
-                bool any = false;
-                for (std::size_t f = 0; f < nf; ++f) {
-                    if (!live[f]) continue;
+                parallel(nf, [&](std::size_t f) {
+                    st.turns[f] = 0;
+                    if (!live[f]) return;
                     const auto& t = tri[f];
                     // against the given guidance where there is one (the volume's side of the surface)
                     const Vec3d& ref = st.base[f];
                     const Vec3d cr = cross(st.next[t[1]] - st.next[t[0]], st.next[t[2]] - st.next[t[0]]);
                     const Vec3d was = cross(st.x[t[1]] - st.x[t[0]], st.x[t[2]] - st.x[t[0]]);
                     // a face already turned is not this move's doing
-                    const bool turns = (dot(was, ref) > 0 && dot(cr, ref) <= 0) ||
-                                       (dot(was, st.filtered[f]) > 0 && dot(cr, st.filtered[f]) <= 0);
-                    if (!turns) continue;
-                    for (std::uint32_t a : t)
-                        if (st.next[a] != st.x[a]) st.revert[a] = 1, any = true;
-                }
+                    st.turns[f] = (dot(was, ref) > 0 && dot(cr, ref) <= 0) ||
+                                  (dot(was, st.filtered[f]) > 0 && dot(cr, st.filtered[f]) <= 0);
+                });
+                std::fill(st.revert.begin(), st.revert.end(), 0);
+                bool any = false;
+                for (std::size_t f = 0; f < nf; ++f)
+                    if (st.turns[f])
+                        for (std::uint32_t a : tri[f])
+                            if (st.next[a] != st.x[a]) st.revert[a] = 1, any = true;
                 if (!any) break;
                 for (std::size_t i = 0; i < n; ++i)
                     if (st.revert[i]) st.next[i] = st.x[i], ++st.reverted;
