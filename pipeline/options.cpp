@@ -273,7 +273,7 @@ std::vector<OptionSpec> make_table() {
         range(row("face-steps", "pipeline.faces.normal_steps", G::OutputMesh, T::Expert, S,
                   [](RunOptions& o) -> auto& { return o.pipeline.faces.normal_steps; },
                   "keep: rounds of the face filter at most (auto: " + std::to_string(kMaxFaceRounds) +
-                      " for faces, which stops at the input's noise; 1 for volume)"), 0, 100000, false, "auto"),
+                      " for faces, which stops at the least estimated error; 1 for volume)"), 0, 100000, false, "auto"),
         range(row("face-vertex-steps", "pipeline.faces.vertex_steps", G::OutputMesh, T::Library, S,
                   [](RunOptions& o) -> auto& { return o.pipeline.faces.vertex_steps; },
                   "keep: vertex-update iterations in each round of the face filter"), 0, 100000),
