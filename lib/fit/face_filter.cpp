@@ -125,8 +125,8 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
     const Rows patch = build_rows(1);
     const Rows hood = o.rings == 1 ? patch : build_rows(o.rings);
 
-    // The state one run of the rounds changes: the vertices and what is measured from them. The risk stop runs a
-    // second, perturbed state in step with the first.
+    // The state one run of the rounds changes: the vertices and what is measured from them. The risk stop runs
+    // kRiskProbes perturbed states in step with the first.
     struct State {
         std::vector<Vec3d> x, normal, centre, guide, filtered, base, next, mean;
         std::vector<double> area, spread;

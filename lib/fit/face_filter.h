@@ -60,9 +60,9 @@ struct FaceFilterOptions {
 /// The risk stop's probe, a fraction of the noise: small enough that the rounds respond to it as to a
 /// small change, large enough to stand above rounding.
 inline constexpr double kRiskProbe = 0.1;
-/// Perturbed copies the risk stop averages its divergence over: its variance falls as their number. With 1
-/// the round chosen on trimstar_n3 ranged over 5 to 9 with the seed, with 4 over 6 to 8, with 8 over 6 to 7
-/// (the least true error at 6).
+/// Perturbed copies the risk stop averages its divergence over: its variance falls as their number, its cost
+/// grows with it. With 1 the round chosen on trimstar_n3 ranged over 5 to 9 with the seed, with 4 over 6 to 8,
+/// with 8 over 6 to 7 (the least true error at 6); the study and the speed tables of 2026-12-06 ran with 4.
 inline constexpr int kRiskProbes = 4;
 /// Rounds the risk stop runs past its least estimate before it stops.
 inline constexpr int kRiskPatience = 3;
