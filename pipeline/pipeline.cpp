@@ -30,6 +30,10 @@ namespace normalflow {
 
 namespace {
 
+/// The input's noise as the pipeline reads it everywhere (the report, the kept filter's stop, the guard's grid,
+/// an automatic σ_s): along the steady normals, which the noise tilts less than each vertex's own.
+double input_noise(const Mesh& m) { return estimate_noise(m, NoiseNormals::Steady).sigma; }
+
 [[noreturn]] void bad_option(const std::string& field, const std::string& value, const char* expected) {
     throw InvalidInput("smooth_mesh: " + field + " = " + value + ": expected " + expected);
 }
@@ -217,7 +221,7 @@ Volume scan_and_smooth_in_bricks(const ScanInput& in, const Mesh& input, Pipelin
                                  const SmoothCheckpoint* checkpoint, const BrickMessageRunner* remote) {
     const Mesh& mesh = *in.mesh;
     const Grid grid = scan_grid(mesh, r.scan_options);
-    const double noise = estimate_noise(input, NoiseNormals::Steady).sigma;
+    const double noise = input_noise(input);
     const SmoothOptions so = engine_options(in.o, grid.voxel_size, model_length_scale(input), noise, &r);
     std::unique_ptr<WindingNumber> wn;
     if (r.scan_options.shell_thickness == 0 && !remote) wn = std::make_unique<WindingNumber>(mesh);
@@ -708,7 +712,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         // The guard's volume alone: it tells which side of the surface a face looks to, by a gradient over two voxels
         // that the noise cannot turn once a voxel is twice the noise (the automatic resolution puts 0.6 to 1.1 of the
         // scans' noise in a voxel); it need not be finer than that.
-        r.noise = estimate_noise(m, NoiseNormals::Steady).sigma;
+        r.noise = input_noise(m);
         const double longest = bounding_box(m).longest_side();
         const int automatic_resolution = auto_resolution(m, scan);
         scan.scan.resolution = automatic_resolution;
@@ -827,7 +831,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     if (own_faces) {
         result.mesh = m;
         // smooth_volume_stage measured it when the engine ran, or the guard's resolution; otherwise it is measured here
-        if (!r.smoothed && r.noise == 0) r.noise = estimate_noise(m, NoiseNormals::Steady).sigma;
+        if (!r.smoothed && r.noise == 0) r.noise = input_noise(m);
         faces.stop_noise = r.noise;
         if (faces.normal_steps == 0) faces.normal_steps = faces.stop_noise > 0 ? kMaxFaceRounds : 0;
     } else {
@@ -922,8 +926,7 @@ Volume smooth_mesh_to_volume(const Mesh& m, const PipelineOptions& o, PipelineRe
 
 void smooth_volume_stage(Volume& v, const PipelineOptions& o, const Mesh& input, PipelineReport* report,
                          Progress* progress, NormalMap* normal_map, const SmoothCheckpoint* checkpoint) {
-    smooth_volume_stage(v, o, model_length_scale(input), estimate_noise(input, NoiseNormals::Steady).sigma, report,
-                        progress, normal_map, checkpoint);
+    smooth_volume_stage(v, o, model_length_scale(input), input_noise(input), report, progress, normal_map, checkpoint);
 }
 
 PipelineResult smooth_volume_input(Volume& v, const PipelineOptions& o, Progress* progress, bool want_mesh,

@@ -88,7 +88,7 @@ std::vector<Vec3d> steady_vertex_normals(const Mesh& m);
 
 /// The normals estimate_noise measures the offsets along.
 enum class NoiseNormals {
-    Own,    ///< each vertex's area-weighted normal, which the noise it measures tilts (the default pipeline's)
+    Own,    ///< each vertex's area-weighted normal, which the noise it measures tilts
     Steady  ///< steady_vertex_normals: reads heavy noise (0.5-0.7 edges) 2-4% low where Own reads it 10-17% low
 };
 
