@@ -36,8 +36,9 @@ void add_new(std::vector<std::string>& to, const std::vector<std::string>& from)
 /// stencils reach 2 voxels, so the samples they read there are the window's own, held as they came.
 constexpr int kFixedBorder = 4;
 /// Voxels inside the held border over which it gives way (SmoothOptions::fixed_zone), at most: 16, four times the held
-/// layer, the noise of fandisk_n0.3 at 512 (3.8 voxels) four times over; a quarter of the halo where that is less. fandisk_n0.3 at 512 in bricks of 256 with a halo of
-/// 128: no window runs away (one did without it); at 256 in bricks of 128 the result is the same with 0, 8 or 16.
+/// layer, the noise of fandisk_n0.3 at 512 (3.8 voxels) four times over; a quarter of the halo where that is less.
+/// fandisk_n0.3 at 512 in bricks of 256 with a halo of 128: no window runs away (one did without it); at 256 in
+/// bricks of 128 the result is the same with 0, 8 or 16.
 constexpr int kFixedZone = 16;
 
 // One main iteration over the bricks: each brick's window, scan-converted (the first iteration) or copied from the
