@@ -14,6 +14,7 @@
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
 #include "extract/surface_attributes.h"
+#include "fit/untangle.h"
 #include "metrics/noise.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/options.h"
@@ -848,7 +849,14 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
             detail::begin(progress, "faces");
         else
             guide = volume_normals_at_faces(result.mesh, v, normal_map[0].values.empty() ? nullptr : &normal_map);
+        // Heavy noise folds the input's faces over along the surface, which the filter's vertex update (along the
+        // faces' normals) cannot undo, and the update can fold a few more where the noise tilted a patch past a right
+        // angle: both are unfolded along the volume's surface, no vertex moving farther than the noise's reach.
+        const double reach = kUntangleNoiseReach * r.noise;
+        if (own_faces) r.untangle_input = untangle(result.mesh, v, reach);
         r.faces = filter_faces(result.mesh, faces, own_faces ? nullptr : &guide);
+        if (own_faces) r.untangle_filtered = untangle(result.mesh, v, reach);
+        r.untangled = own_faces;
         r.faces_filtered = true;
         const double seconds = faces_clock.lap();
         r.seconds.extract += seconds;

@@ -20,6 +20,7 @@
 #include "extract/extract_surface.h"
 #include "fit/face_filter.h"
 #include "fit/fit_mesh.h"
+#include "fit/untangle.h"
 #include "io/cgal/cleanup.h"
 #include "io/cgal/repair.h"
 #include "metrics/surface_distance.h"
@@ -102,6 +103,12 @@ inline constexpr int kMaxFaceRounds = 30;
 /// (heavy noise that tangled the triangles: fandisk_n0.7, fandisk_n6, trimstar_n0.5, vaselion) beyond
 /// 2.86°; the one exception, twelve_imp0.5 (1.66°), is kept at a cost of 0.18°.
 inline constexpr double kAutoKeepFitAngleDeg = 2.5;
+
+/// A kept mesh's folds are unfolded (untangle) with no vertex moving farther than this many times the input's noise
+/// (PipelineReport::noise) from where it was: the noise moved its vertices about that far along the surface (3σ holds
+/// 99.7% of Gaussian noise), and a mesh whose folds are not the noise's stays nearly as it was. On the study's heavily
+/// noisy pairs the reach of 3σ unfolds as much as no limit, and leaves fandisk_n6 0.3° better face by face.
+inline constexpr double kUntangleNoiseReach = 3.0;
 
 /// PipelineOptions::sharpen: no vertex moves farther than this many voxels (the bevel marching tetrahedra cuts is
 /// about one voxel wide; two let vertices cross and meet: fandisk at 256, docs/history/benchmarks-2026.md "Sharp re-meshing").
@@ -260,6 +267,10 @@ struct PipelineReport {
     FitReport fit;                   ///< valid when fitted
     bool faces_filtered = false;     ///< the kept mesh's faces were filtered (filter_faces)
     FaceFilterReport faces;          ///< valid when faces_filtered
+    /// KeepFilter::Faces: the input's faces folded over against the volume unfolded along its surface before the
+    /// filter (untangle_input) and those the filter folded after it (untangle_filtered); valid when untangled.
+    bool untangled = false;
+    UntangleReport untangle_input, untangle_filtered;
     /// Kept: vertices moved back toward their input position (halfway each time, all the way after four halvings)
     /// because the fit made their faces intersect others, lose their area or turn over against the volume's surface
     /// (faces_against_volume; the smoothed one, or the input's own where the engine did not run) where the input's

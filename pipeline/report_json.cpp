@@ -213,6 +213,17 @@ Json to_json(const PipelineReport& r) {
                                  .set("rms_displacement", r.faces.rms_displacement)
                                  .set("reverted_moves", r.faces.reverted_moves)
                                  .set("restored", r.fit_restored));
+    if (r.untangled) {
+        const auto one = [](const UntangleReport& u) {
+            return Json::object()
+                .set("folded_before", u.folded_before)
+                .set("folded_after", u.folded_after)
+                .set("moved", u.moved)
+                .set("passes", u.passes)
+                .set("undone", u.undone);
+        };
+        j.set("untangle", Json::object().set("input", one(r.untangle_input)).set("filtered", one(r.untangle_filtered)));
+    }
     if (!r.connectivity_kept) j.set("extract", to_json(r.extract));
     if (r.sharpened) {
         const SharpenReport& h = r.sharpen;
