@@ -72,15 +72,26 @@ UntangleReport untangle(Mesh& m, const Volume& v, double max_move, int max_passe
     std::vector<char> against, region(n);
     std::vector<Vec3d> next;
     rep.folded_before = rep.folded_after = folded(against);
+    std::size_t least = rep.folded_after;
+    int since_least = 0, rings = 0;
     for (; rep.passes < max_passes && rep.folded_after > 0 && max_move > 0; ++rep.passes) {
-        // the vertices of the folded faces and their neighbours
+        if (since_least >= kUntanglePatience) {  // stuck: the neighbours move too, then theirs
+            if (rings == kUntangleRings) break;
+            ++rings;
+            since_least = 0;
+        }
+        // the vertices of the folded faces, and `rings` rings of their neighbours
         std::fill(region.begin(), region.end(), 0);
         for (std::size_t f = 0; f < tri.size(); ++f)
             if (against[f])
-                for (const std::uint32_t a : tri[f]) {
-                    region[a] = 1;
-                    for (std::uint32_t k = start[a]; k < start[a + 1]; ++k) region[items[k]] = 1;
-                }
+                for (const std::uint32_t a : tri[f]) region[a] = 1;
+        for (int ring = 0; ring < rings; ++ring) {
+            std::vector<char> grown = region;
+            for (std::size_t i = 0; i < n; ++i)
+                if (region[i])
+                    for (std::uint32_t k = start[i]; k < start[i + 1]; ++k) grown[items[k]] = 1;
+            region.swap(grown);
+        }
         next = x;
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -102,6 +113,12 @@ UntangleReport untangle(Mesh& m, const Volume& v, double max_move, int max_passe
         });
         x.swap(next);
         rep.folded_after = folded(against);
+        if (rep.folded_after < least) {
+            least = rep.folded_after;
+            since_least = 0;
+        } else {
+            ++since_least;
+        }
     }
     if (rep.folded_after >= rep.folded_before) {  // no better: as it was
         x = start_x;

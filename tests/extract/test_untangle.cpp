@@ -61,7 +61,8 @@ TEST(Untangle, AFoldedSphereUnfoldsAndStaysOnTheSphere) {
         const Vec3d d = Vec3d(m.positions[i]) - Vec3d(before.positions[i]);
         const double radial = std::abs(dot(d, normalized(Vec3d(before.positions[i]) - kCentre)));
         across += radial;
-        along += norm(d - normalized(Vec3d(before.positions[i]) - kCentre) * dot(d, normalized(Vec3d(before.positions[i]) - kCentre)));
+        along += norm(d - normalized(Vec3d(before.positions[i]) - kCentre) *
+                              dot(d, normalized(Vec3d(before.positions[i]) - kCentre)));
     }
     EXPECT_LT(across, 0.02 * along) << across << " across, " << along << " along";
     // only around the folds: most vertices where they were
@@ -93,6 +94,22 @@ TEST(Untangle, AMeshWithoutFoldsIsLeftAsItIs) {
     EXPECT_GT(none.folded_before, 0u);
     EXPECT_EQ(none.folded_after, none.folded_before);
     EXPECT_EQ(f.positions, g.positions);
+}
+
+TEST(Untangle, FoldsThatDoNotUnfoldStopThePassesAndAreLeftAsTheyWere) {
+    // a sphere turned inside out: every face folded against the volume, and no move along the surface turns one
+    // back; the passes stop once kUntanglePatience of them in a row unfolded nothing with each of the rings of
+    // neighbours, and every vertex goes back
+    const Volume v = test::make_volume(64, 0.05, test::sphere_sdf(kCentre, 1.0));
+    Mesh inside_out = folded_sphere(41, 1.6);
+    for (Tri& t : inside_out.triangles) std::swap(t[1], t[2]);
+    const Mesh before = inside_out;
+    const UntangleReport r = untangle(inside_out, v, 1.0);
+    EXPECT_GT(r.folded_before, before.triangles.size() * 9 / 10);
+    EXPECT_EQ(r.folded_after, r.folded_before);
+    EXPECT_TRUE(r.undone);
+    EXPECT_LE(r.passes, kUntanglePatience * (kUntangleRings + 1) + 1);
+    EXPECT_EQ(inside_out.positions, before.positions);
 }
 
 TEST(Untangle, OpenBordersStay) {
