@@ -41,11 +41,8 @@ std::vector<char> faces_against_volume(const Mesh& m, const Volume& v) {
         tbb::blocked_range<std::size_t>(0, m.triangles.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t f = r.begin(); f != r.end(); ++f) {
                 const Tri& t = m.triangles[f];
-                const Vec3d c = (Vec3d(m.positions[t[0]]) + Vec3d(m.positions[t[1]]) + Vec3d(m.positions[t[2]])) / 3.0;
-                if (S.outside_band(c)) continue;
-                Vec3d g;
-                S.phi(c, &g);
-                against[f] = dot(face_area_vector(m, t), g) < 0;
+                against[f] =
+                    S.turned_against(Vec3d(m.positions[t[0]]), Vec3d(m.positions[t[1]]), Vec3d(m.positions[t[2]]));
             }
         });
     return against;

@@ -47,6 +47,16 @@ public:
         return false;
     }
 
+    /// Whether the triangle (a, b, c) is turned over against the volume: its area vector and ∇φ at its centroid make
+    /// more than 90°; false where the centroid is outside the band (faces_against_volume's test, and untangle's).
+    bool turned_against(const Vec3d& a, const Vec3d& b, const Vec3d& c) const {
+        const Vec3d centre = (a + b + c) / 3.0;
+        if (outside_band(centre)) return false;
+        Vec3d g;
+        phi(centre, &g);
+        return dot(cross(b - a, c - a), g) < 0;
+    }
+
 private:
     const Volume& v_;
     double h_;

@@ -58,14 +58,8 @@ UntangleReport untangle(Mesh& m, const Volume& v, double max_move, int max_passe
         out.assign(tri.size(), 0);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tri.size(), 1024),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t f = r.begin(); f != r.end(); ++f) {
-                                  const auto& t = tri[f];
-                                  const Vec3d c = (x[t[0]] + x[t[1]] + x[t[2]]) / 3.0;
-                                  if (S.outside_band(c)) continue;
-                                  Vec3d g;
-                                  S.phi(c, &g);
-                                  out[f] = dot(cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]), g) < 0;
-                              }
+                              for (std::size_t f = r.begin(); f != r.end(); ++f)
+                                  out[f] = S.turned_against(x[tri[f][0]], x[tri[f][1]], x[tri[f][2]]);
                           });
         return std::size_t(std::count(out.begin(), out.end(), char(1)));
     };
