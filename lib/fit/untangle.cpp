@@ -67,8 +67,9 @@ UntangleReport untangle(Mesh& m, const Volume& v, double max_move, int max_passe
     std::vector<Vec3d> next;
     rep.folded_before = rep.folded_after = folded(against);
     std::size_t least = rep.folded_after;
+    std::vector<Vec3d> best = x;
     int since_least = 0, rings = 0;
-    for (; rep.passes < max_passes && rep.folded_after > 0 && max_move > 0; ++rep.passes) {
+    for (; rep.passes < max_passes && least > 0 && max_move > 0; ++rep.passes) {
         if (since_least >= kUntanglePatience) {  // stuck: the neighbours move too, then theirs
             if (rings == kUntangleRings) break;
             ++rings;
@@ -109,14 +110,15 @@ UntangleReport untangle(Mesh& m, const Volume& v, double max_move, int max_passe
         rep.folded_after = folded(against);
         if (rep.folded_after < least) {
             least = rep.folded_after;
+            best = x;
             since_least = 0;
         } else {
             ++since_least;
         }
     }
-    if (rep.folded_after >= rep.folded_before) {  // no better: as it was
-        x = start_x;
-        rep.folded_after = rep.folded_before;
+    rep.folded_after = least;  // the pass with the fewest folds
+    x.swap(best);
+    if (least >= rep.folded_before) {  // no better: as it was
         rep.undone = rep.passes > 0;
     }
     for (std::size_t i = 0; i < n; ++i) rep.moved += Vec3f(x[i]) != Vec3f(start_x[i]);

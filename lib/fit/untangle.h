@@ -31,7 +31,8 @@ struct UntangleReport {
 /// Moves the vertices of the faces of m turned over against v along the surface, each pass to the centre of its
 /// neighbours in the plane across ∇φ but no farther than max_move (world units) from where it began, until none is
 /// turned over or max_passes passes have run; where the folded faces' own vertices stop unfolding them, their
-/// neighbours move too (kUntanglePatience, kUntangleRings). The noise that folded the faces moved their
+/// neighbours move too (kUntanglePatience, kUntangleRings). The positions kept are those of the pass that left the
+/// fewest folds. The noise that folded the faces moved their
 /// vertices by about its deviation σ: 3σ undoes it, and leaves a mesh whose folds are not the noise's (a coarse
 /// model thinner than the volume's voxels) nearly where it was. If the passes leave no fewer folds, every vertex
 /// goes back (the report's undone). The vertices, faces and their order stay; open-boundary vertices and those
