@@ -115,11 +115,11 @@ std::vector<OptionSpec> make_table() {
         "; bilateral, guided, tv: a refit time of " + shortest(kNeighbourhoodRefitTime, true) +
         " length units squared)";
     const std::string connectivity =
-        "keep: the input's own mesh, its vertices moved onto the result; remesh: a new mesh extracted from it (open "
-        "where the input is open, see --closed); auto: keep for an open input, and for a closed one whose fitted "
-        "faces agree with the result within " +
-        shortest(kAutoKeepFitAngleDeg, false) +
-        " degrees on average; remesh otherwise and whenever --target-faces, --max-error or --closed is given";
+        "keep: the input's own mesh, its faces smoothed (see --keep-filter); remesh: a new mesh extracted from it "
+        "(open "
+        "where the input is open, see --closed); auto: keep for an open input, and for a closed one whose kept "
+        "result is manifold with no faces intersecting (as a re-meshed result); remesh otherwise and whenever "
+        "--target-faces, --max-error or --closed is given";
     const std::string full_density = "keep every triangle of a re-meshed result (default: decimated within " +
                                      shortest(kCompactErrorVoxels, false) + " voxel of its surface and " +
                                      shortest(kCompactNormalDeviationDeg, false) +

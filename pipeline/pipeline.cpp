@@ -6,6 +6,7 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <type_traits>
@@ -698,6 +699,27 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     const bool automatic = o.connectivity == Connectivity::Auto && o.target_faces == 0 && o.max_error == 0 && !o.closed;
     bool keep = o.connectivity == Connectivity::Keep || (automatic && open);
     const bool own_faces = o.keep_filter == KeepFilter::Faces;
+    // Auto keeps a closed input's own mesh where the kept result comes out as clean as a re-meshed one is by
+    // construction: manifold, and no two faces intersecting. The kept mesh has the input's connectivity, so a
+    // non-manifold input is re-meshed at once; the intersections are the kept result's to count (the noise makes the
+    // input's, which the filter undoes; its guard lets no face come to intersect another, but leaves those it found),
+    // so the input is kept, the engine stopping after its first iteration, and where the kept result has intersecting
+    // faces the whole run is made again, re-meshed. A closed, oriented, manifold surface that does not intersect itself
+    // bounds a solid, every face looking out of it: a face that the smoothed surface sees turned over there lies where
+    // the surface does not resolve the mesh (a crevice or a fin narrower than its voxels: the ground truth of the
+    // study's vaselion has 7) and is reported, not a reason to re-mesh.
+    if (automatic && !open) {
+        const MeshReport in = mesh_report(m);
+        keep = in.manifold;
+        if (!keep) {
+            const auto count = [](std::size_t n, const char* what) {
+                return n ? std::to_string(n) + " non-manifold " + what : std::string();
+            };
+            const std::string edges = count(in.non_manifold_edges, "edges"),
+                              vertices = count(in.non_manifold_vertices, "vertices");
+            r.keep_declined = edges + (edges.empty() || vertices.empty() ? "" : " and ") + vertices + " in the input";
+        }
+    }
     // A mesh kept and filtered on its own faces takes nothing from the engine but the guard's reference below (which
     // side of the surface each face looks to). On an open input the input's own distance serves that, and the engine
     // does not run (nor counts in the memory check): on the open scans of the study the result is within 0.02° face by
@@ -732,53 +754,107 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     Volume v;
     if (!bricked) v = normalflow::scan(scan_input, r, progress);
     NormalMap normal_map;  // the engine's last filtered normals, when the fit is to turn faces to them
-    // The fit of the input to a smoothed surface: the kept result where the fit is (KeepFilter::Volume, Fit), and auto's
-    // keep or re-mesh on a closed input: it is kept when its fitted faces agree with the volume's normals
-    // (kAutoKeepFitAngleDeg), the noise having moved its vertices across the surface only, not along it.
-    const auto fit_to = [&](Mesh& fitted, const Volume& surface) {
-        fitted = m;
-        r.fit = fit_mesh_to_volume(fitted, surface, o.fit, normal_map[0].values.empty() ? nullptr : &normal_map);
-        r.fitted = true;
-        if (automatic && !open) keep = keep || r.fit.mean_face_angle_deg < kAutoKeepFitAngleDeg;
-    };
-    // A closed input kept on its own faces reads the engine's volume only for the guard, and auto's keep or re-mesh
-    // only for the fit angle above: both read the surface of the engine's first iteration, and the engine goes on
-    // only for a surface that is re-meshed. On the study's closed pairs the first iteration's fit angle keeps and
-    // re-meshes the same pairs as the last one's (kept 1.40 to 2.31°, re-meshed 3.44 to 5.71°; docs/history/
-    // benchmarks-2026.md, "The keep decision after the first iteration").
-    bool decided = false;
-    double decision_seconds = 0;
-    const SmoothCheckpoint go_on = [&](const Volume& surface) {
-        if (!decided) {
-            Stopwatch clock;
-            if (automatic && !open) {
-                Mesh fitted;
-                fit_to(fitted, surface);
-            }
-            decided = true;
-            decision_seconds += clock.lap();
+    // The kept result on a smoothed surface (the engine's, or the input's own distance where the engine did not run):
+    // the input's own faces filtered (KeepFilter::Faces), or the input fitted to the surface and its faces turned to
+    // the surface's normals (Volume, Fit); then guarded and checked. Its time is the caller's to count.
+    const auto kept_result = [&](const Volume& surface) {
+        Mesh kept = m;
+        FaceFilterOptions faces = o.faces;
+        std::vector<Vec3d> guide;
+        if (own_faces) {
+            // smooth_volume_stage measured it when the engine ran, or the guard's resolution; otherwise it is measured
+            // here
+            if (!r.smoothed && r.noise == 0) r.noise = input_noise(m);
+            faces.stop_noise = r.noise;
+            if (faces.normal_steps == 0) faces.normal_steps = faces.stop_noise > 0 ? kMaxFaceRounds : 0;
+            detail::begin(progress, "faces");
+        } else {
+            detail::begin(progress, "fit");
+            r.fit = fit_mesh_to_volume(kept, surface, o.fit, normal_map[0].values.empty() ? nullptr : &normal_map);
+            r.fitted = true;
+            if (o.keep_filter == KeepFilter::Fit)
+                faces.normal_steps = 0;
+            else if (faces.normal_steps == 0)
+                faces.normal_steps = 1;
+            if (faces.normal_steps > 0)
+                guide = volume_normals_at_faces(kept, surface, normal_map[0].values.empty() ? nullptr : &normal_map);
         }
-        return !keep;
+        if (own_faces || faces.normal_steps > 0) {
+            // Heavy noise folds the input's faces over along the surface, which the filter's vertex update (along the
+            // faces' normals) cannot undo, and the update can fold a few more where the noise tilted a patch past a
+            // right angle: both are unfolded along the volume's surface, no vertex moving farther than the noise's
+            // reach.
+            const double reach = kUntangleNoiseReach * r.noise;
+            if (own_faces) r.untangle_input = untangle(kept, surface, reach);
+            r.faces = filter_faces(kept, faces, own_faces ? nullptr : &guide);
+            if (own_faces) r.untangle_filtered = untangle(kept, surface, reach);
+            r.untangled = own_faces;
+            r.faces_filtered = true;
+        }
+        // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
+        // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward
+        // where the input had them (halfway each round, all the way in the end), until none does: the kept mesh has no
+        // intersection the input did not have. Nor may a face turn over against the volume's surface (smoothed, or the
+        // input's own where the engine did not run) where the input's face did not: its vertices move back the same
+        // way. Moving vertices back for one reason can break the other, so the two alternate until both hold.
+        {
+            const std::vector<char> input_against = faces_against_volume(m, surface);
+            r.input_flipped_faces = std::count(input_against.begin(), input_against.end(), char(1));
+            VertexRestorer back(kept, m.positions);
+            back.flips(surface, input_against);
+            for (int round = 0; round < 8 && back.intersections(/*weld=*/true, /*halve=*/true) > 0; ++round)
+                if (back.flips(surface, input_against) == 0) break;
+            r.fit_restored = back.restored();
+            const std::vector<char> against = faces_against_volume(kept, surface);
+            r.flipped_faces = std::count(against.begin(), against.end(), char(1));
+        }
+        // replaces the input's normals, which belong to the noisy surface
+        if (own_faces)
+            compute_vertex_normals(kept);
+        else
+            set_volume_normals(kept, surface);
+        r.connectivity_kept = true;
+        if (!own_faces && r.fit.outside_band > 0)
+            r.warnings.push_back(std::to_string(r.fit.outside_band) + " of the " + std::to_string(r.fit.vertices) +
+                                 " vertices were left unsmoothed: the smoothed surface is farther from them than its "
+                                 "band (at open borders, spikes, strays or parts thinner than a voxel)");
+        r.input_self_intersections = self_intersection_pairs(m, true);
+        check_output(kept, r, false, false, r.input_self_intersections);
+        return kept;
     };
-    const bool early = own_faces && !open && (keep || automatic);
-    if (bricked) {
+    // A closed input kept on its own faces reads the engine's volume only for the guard and the unfolding: the engine
+    // stops after its first iteration.
+    const SmoothCheckpoint go_on = [&](const Volume&) { return !keep; };
+    const bool early = own_faces && !open && keep;
+    if (bricked)
         v = scan_and_smooth_in_bricks(scan_input, m, r, progress, early ? &go_on : nullptr, bricks);
-        r.seconds.smooth -= decision_seconds;  // the fit counts with the extraction, as below
-        r.seconds.extract += decision_seconds;
-    } else if (engine) {
+    else if (engine)
         smooth_volume_stage(v, o, m, &r, progress, o.fit_to_normal_map ? &normal_map : nullptr,
                             early ? &go_on : nullptr);
-        r.seconds.smooth -= decision_seconds;  // the fit counts with the extraction, as below
-        r.seconds.extract += decision_seconds;
-    }
-    Stopwatch fit_clock;
-    Mesh fitted;
-    if ((keep && !own_faces) || (automatic && !open && !decided)) {
-        detail::begin(progress, "fit");
-        fit_to(fitted, v);
-        const double seconds = fit_clock.lap();
-        r.seconds.extract += seconds;
-        r.seconds.total += seconds;
+    Stopwatch kept_clock;
+    Mesh kept;
+    if (keep) kept = kept_result(v);
+    const double kept_seconds = kept_clock.lap();
+    r.seconds.extract += kept_seconds;
+    r.seconds.total += kept_seconds;
+    if (automatic && !open && keep) {
+        // Where the kept result has pairs of intersecting faces (or, in a build without CGAL, which cannot count them,
+        // faces turned over against the surface, which stand in for them), the input is re-meshed after all, the whole
+        // run again (the kept result's time counted with its extraction).
+        std::string defects;
+        if (r.output_self_intersections > 0)
+            defects = std::to_string(r.output_self_intersections) + " pairs of intersecting faces in the kept result";
+        else if (r.output_self_intersections < 0 && r.flipped_faces > 0)
+            defects = std::to_string(r.flipped_faces) + " faces turned over against the surface in the kept result";
+        if (!defects.empty()) {
+            PipelineOptions remesh = o;
+            remesh.connectivity = Connectivity::Remesh;
+            PipelineResult again = smooth_mesh(m, remesh, progress, bricks);
+            again.report.keep_declined = defects;
+            again.report.seconds.extract += r.seconds.total;
+            again.report.seconds.total += r.seconds.total;
+            return again;
+        }
     }
     // The scan conversion's note on an open mesh is about the volume: a result that keeps the input's openings
     // (its own mesh, or the surface trimmed to its footprint) needs no word on them; a closed one spans them.
@@ -787,114 +863,45 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         if (!keep && o.closed)
             r.warnings.push_back("the input is open: the closed result spans its holes and boundaries");
     }
-    if (!keep) {
-        // An open input's surface is trimmed before the compact default decimates it: the cut then runs through the
-        // extraction's small faces, and the decimation keeps the open border where the cut left it.
-        const bool trim = open && !o.closed;
-        const bool compact_after_trim = trim && !o.full_density && o.target_faces == 0 && o.max_error == 0;
-        PipelineOptions extraction = o;
-        extraction.full_density = extraction.full_density || compact_after_trim;
-        result.mesh = volume_to_mesh(v, extraction, &r, progress, &m);
-        std::unique_ptr<ClosestTriangleQuery> q;
-        if (trim) {
-            Stopwatch trim_clock;
-            q = make_bvh_query(m);
-            // the cap lies away from the input; the smoothed surface within its noise (a fraction of an edge)
-            const double h = v.grid.voxel_size;
-            r.trim = trim_to_footprint(result.mesh, m, *q, h, 3 * std::max(h, model_length_scale(m)));
-            r.trimmed = true;
-            if (result.mesh.empty())
-                throw InvalidInput(
-                    "nothing of the surface is left after trimming it to the open input's footprint; "
-                    "--closed keeps the closed surface");
-            const double seconds = trim_clock.lap();  // counted with the extraction
-            r.seconds.extract += seconds;
-            r.seconds.total += seconds;
-        }
-        if (compact_after_trim) {
-            compact_surface(result.mesh, v, o, r, progress);
-            set_volume_normals(result.mesh, v);
-            r.seconds.total += r.seconds.decimate;
-        }
-        if (m.has_colors()) transfer_colors(result.mesh, m, q ? *q : *(q = make_bvh_query(m)));
-        if (m.has_texcoords())
-            r.warnings.push_back(
-                "texture coordinates dropped: re-meshing makes new vertices "
-                "(--connectivity keep keeps them)");
-        check_output(result.mesh, r, true, !r.trimmed);
+    if (keep) {
+        result.mesh = std::move(kept);
+        r.peak_memory_bytes = peak_memory_bytes();
         return result;
     }
-    // The kept mesh's face filter. Own faces: the input's, filtered for as many rounds as leave the least error by
-    // Stein's unbiased risk estimate for its noise (the mesh's detail is the input's, at its own resolution, where
-    // the grid would round it over a voxel). Volume: the
-    // fitted mesh's, guided by the volume's normals (creases as sharp as the input's tessellation allows).
-    FaceFilterOptions faces = o.faces;
-    if (own_faces) {
-        result.mesh = m;
-        // smooth_volume_stage measured it when the engine ran, or the guard's resolution; otherwise it is measured here
-        if (!r.smoothed && r.noise == 0) r.noise = input_noise(m);
-        faces.stop_noise = r.noise;
-        if (faces.normal_steps == 0) faces.normal_steps = faces.stop_noise > 0 ? kMaxFaceRounds : 0;
-    } else {
-        result.mesh = std::move(fitted);
-        if (o.keep_filter == KeepFilter::Fit)
-            faces.normal_steps = 0;
-        else if (faces.normal_steps == 0)
-            faces.normal_steps = 1;
-    }
-    if (own_faces || faces.normal_steps > 0) {
-        Stopwatch faces_clock;
-        std::vector<Vec3d> guide;
-        if (own_faces)
-            detail::begin(progress, "faces");
-        else
-            guide = volume_normals_at_faces(result.mesh, v, normal_map[0].values.empty() ? nullptr : &normal_map);
-        // Heavy noise folds the input's faces over along the surface, which the filter's vertex update (along the
-        // faces' normals) cannot undo, and the update can fold a few more where the noise tilted a patch past a right
-        // angle: both are unfolded along the volume's surface, no vertex moving farther than the noise's reach.
-        const double reach = kUntangleNoiseReach * r.noise;
-        if (own_faces) r.untangle_input = untangle(result.mesh, v, reach);
-        r.faces = filter_faces(result.mesh, faces, own_faces ? nullptr : &guide);
-        if (own_faces) r.untangle_filtered = untangle(result.mesh, v, reach);
-        r.untangled = own_faces;
-        r.faces_filtered = true;
-        const double seconds = faces_clock.lap();
+    // An open input's surface is trimmed before the compact default decimates it: the cut then runs through the
+    // extraction's small faces, and the decimation keeps the open border where the cut left it.
+    const bool trim = open && !o.closed;
+    const bool compact_after_trim = trim && !o.full_density && o.target_faces == 0 && o.max_error == 0;
+    PipelineOptions extraction = o;
+    extraction.full_density = extraction.full_density || compact_after_trim;
+    result.mesh = volume_to_mesh(v, extraction, &r, progress, &m);
+    std::unique_ptr<ClosestTriangleQuery> q;
+    if (trim) {
+        Stopwatch trim_clock;
+        q = make_bvh_query(m);
+        // the cap lies away from the input; the smoothed surface within its noise (a fraction of an edge)
+        const double h = v.grid.voxel_size;
+        r.trim = trim_to_footprint(result.mesh, m, *q, h, 3 * std::max(h, model_length_scale(m)));
+        r.trimmed = true;
+        if (result.mesh.empty())
+            throw InvalidInput(
+                "nothing of the surface is left after trimming it to the open input's footprint; "
+                "--closed keeps the closed surface");
+        const double seconds = trim_clock.lap();  // counted with the extraction
         r.seconds.extract += seconds;
         r.seconds.total += seconds;
     }
-    // The fit moves each vertex on its own: where two sheets of the input lie closer than the noise, faces can be
-    // pushed through each other. The vertices of faces that now intersect (or lost their area) move back toward where
-    // the input had them (halfway each round, all the way in the end), until none does: the kept mesh has no
-    // intersection the input did not have. Nor may a face turn over against the volume's surface (smoothed, or the
-    // input's own where the engine did not run) where the input's face did not: its vertices move back the same way.
-    // Moving vertices back for one reason can break the other, so the two alternate until both hold.
-    {
-        const std::vector<char> input_against = faces_against_volume(m, v);
-        r.input_flipped_faces = std::count(input_against.begin(), input_against.end(), char(1));
-        VertexRestorer back(result.mesh, m.positions);
-        back.flips(v, input_against);
-        for (int round = 0; round < 8 && back.intersections(/*weld=*/true, /*halve=*/true) > 0; ++round)
-            if (back.flips(v, input_against) == 0) break;
-        r.fit_restored = back.restored();
-        const std::vector<char> against = faces_against_volume(result.mesh, v);
-        r.flipped_faces = std::count(against.begin(), against.end(), char(1));
-    }
-    // replaces the input's normals, which belong to the noisy surface
-    if (own_faces)
-        compute_vertex_normals(result.mesh);
-    else
+    if (compact_after_trim) {
+        compact_surface(result.mesh, v, o, r, progress);
         set_volume_normals(result.mesh, v);
-    r.connectivity_kept = true;
-    if (!own_faces && r.fit.outside_band > 0)
-        r.warnings.push_back(std::to_string(r.fit.outside_band) + " of the " + std::to_string(r.fit.vertices) +
-                             " vertices were left unsmoothed: the smoothed surface is farther from them than its band "
-                             "(at open borders, spikes, strays or parts thinner than a voxel)");
-    r.input_self_intersections = self_intersection_pairs(m, true);
-    check_output(result.mesh, r, false, false, r.input_self_intersections);
-    const double seconds = fit_clock.lap();
-    r.seconds.extract += seconds;
-    r.seconds.total += seconds;
-    r.peak_memory_bytes = peak_memory_bytes();
+        r.seconds.total += r.seconds.decimate;
+    }
+    if (m.has_colors()) transfer_colors(result.mesh, m, q ? *q : *(q = make_bvh_query(m)));
+    if (m.has_texcoords())
+        r.warnings.push_back(
+            "texture coordinates dropped: re-meshing makes new vertices "
+            "(--connectivity keep keeps them)");
+    check_output(result.mesh, r, true, !r.trimmed);
     return result;
 }
 

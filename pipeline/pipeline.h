@@ -61,10 +61,12 @@ inline constexpr int kAutoResolutionMax = 512;
 /// Options of smooth_mesh (and of its halves, mesh_to_volume and volume_to_mesh).
 /// What smooth_mesh hands back.
 enum class Connectivity {
-    Auto,    ///< Keep for an open input (has_open_boundary) and for a closed one whose fit agrees with the
-             ///< result (kAutoKeepFitAngleDeg), Remesh for the other closed ones
-    Keep,    ///< the input mesh itself, its vertices moved onto the processed surface (fit_mesh_to_volume):
-             ///< the same vertices, faces and order, open where the input was open
+    Auto,    ///< Keep for an open input (has_open_boundary), and for a closed one whose kept result is manifold with
+             ///< no pair of faces intersecting (as clean as a re-meshed one); Remesh for the other closed ones: a
+             ///< non-manifold input at once, one whose kept result has intersecting faces by running again
+             ///< (PipelineReport::keep_declined says why)
+    Keep,    ///< the input mesh itself, its faces filtered or its vertices moved onto the processed surface
+             ///< (KeepFilter): the same vertices, faces and order, open where the input was open
     Remesh,  ///< the extracted zero level set: a new mesh, closed and manifold
 };
 
@@ -95,14 +97,6 @@ const char* to_string(KeepFilter k);
 /// KeepFilter::Faces: the most rounds of the face filter (each round moves the vertices less; on the study's
 /// noisy pairs the noise is reached after 2 to 7).
 inline constexpr int kMaxFaceRounds = 30;
-
-/// Connectivity::Auto keeps a closed input's mesh when, fitted to the processed volume, its faces
-/// are within this mean angle (degrees, FitReport::mean_face_angle_deg) of the volume's normals, and
-/// re-meshes it otherwise. Chosen on the study's 12 closed pairs (docs/history/benchmarks-2026.md, "The user's mesh
-/// handed back"): every pair kept better than re-meshed fitted within 2.14°, every pair re-meshed better
-/// (heavy noise that tangled the triangles: fandisk_n0.7, fandisk_n6, trimstar_n0.5, vaselion) beyond
-/// 2.86°; the one exception, twelve_imp0.5 (1.66°), is kept at a cost of 0.18°.
-inline constexpr double kAutoKeepFitAngleDeg = 2.5;
 
 /// A kept mesh's folds are unfolded (untangle) with no vertex moving farther than this many times the input's noise
 /// (PipelineReport::noise) from where it was: the noise moved its vertices about that far along the surface (3σ holds
@@ -188,8 +182,8 @@ struct PipelineOptions {
     /// 0: the input's median edge length, at most 1/25.6 of its longest side (model_length_scale).
     double length_scale = 0;
     /// What comes back: the input's own mesh fitted to the result, or a new one extracted from it.
-    /// Auto keeps an open input's, and a closed input's whose fitted faces agree with the result
-    /// (kAutoKeepFitAngleDeg), and re-meshes the others. Keep refuses target_faces.
+    /// Auto keeps an open input's, and a closed input's whose kept result is manifold with no faces intersecting, and
+    /// re-meshes the others. Keep refuses target_faces.
     Connectivity connectivity = Connectivity::Auto;
     /// An open input re-meshed comes back open: the cap that closed its volume is trimmed off
     /// (trim_to_footprint). closed = true keeps the closed, watertight surface instead (3D printing,
@@ -262,11 +256,15 @@ struct PipelineReport {
     bool smoothed = false;           ///< smooth_volume ran
     SmoothReport smooth;             ///< valid when smoothed
     ExtractReport extract;           ///< valid when !connectivity_kept
-    bool connectivity_kept = false;  ///< the result is the input's mesh fitted (Connectivity::Keep)
-    bool fitted = false;             ///< the input's mesh was fitted (kept, or tried under Connectivity::Auto)
-    FitReport fit;                   ///< valid when fitted
-    bool faces_filtered = false;     ///< the kept mesh's faces were filtered (filter_faces)
-    FaceFilterReport faces;          ///< valid when faces_filtered
+    bool connectivity_kept = false;  ///< the result is the input's mesh (Connectivity::Keep, or Auto's keep)
+    /// Connectivity::Auto re-meshed a closed input because of these defects: the input's non-manifold edges and
+    /// vertices, or its kept result's pairs of intersecting faces (without CGAL, faces turned over against the
+    /// surface); "" otherwise.
+    std::string keep_declined;
+    bool fitted = false;          ///< the input's mesh was fitted to the volume (KeepFilter::Volume, Fit)
+    FitReport fit;                ///< valid when fitted
+    bool faces_filtered = false;  ///< the kept mesh's faces were filtered (filter_faces)
+    FaceFilterReport faces;       ///< valid when faces_filtered
     /// KeepFilter::Faces: the input's faces folded over against the volume unfolded along its surface before the
     /// filter (untangle_input) and those the filter folded after it (untangle_filtered); valid when untangled.
     bool untangled = false;

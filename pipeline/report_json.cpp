@@ -193,6 +193,7 @@ Json to_json(const PipelineReport& r) {
     }
     if (r.smoothed || r.noise > 0) j.set("noise", r.noise);
     j.set("connectivity", r.connectivity_kept ? "kept" : "remeshed");
+    if (!r.keep_declined.empty()) j.set("keep_declined", r.keep_declined);
     if (r.fitted) {
         Json f = Json::object();
         f.set("vertices", r.fit.vertices)

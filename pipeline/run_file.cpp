@@ -277,7 +277,7 @@ FileRun mesh_file(Command c, const std::string& input, const std::string& output
     stop_notes(opt, r, f);
     write_mesh_result(output, result.mesh, p, f, run.draco);
     f.summary = output + " (" + triangles_note(result.mesh, r) +
-                (!r.connectivity_kept                   ? ""
+                (!r.connectivity_kept ? (r.keep_declined.empty() ? "" : ", re-meshed for " + r.keep_declined)
                  : opt.keep_filter == KeepFilter::Faces ? ", the input's mesh, filtered on its own faces"
                                                         : ", the input's mesh, fitted") +
                 ")";

@@ -417,11 +417,23 @@ TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
     EXPECT_TRUE(has(spanned.report.warnings, "the input is open: the closed result spans its holes"));
     EXPECT_FALSE(has(spanned.report.warnings, "scan_convert: the mesh is open"));
 
-    // a closed input: kept when its fitted faces agree with the result (a clean sphere), re-meshed when
-    // the noise tangled its triangles along the surface (kAutoKeepFitAngleDeg)
+    // a closed input: kept when its kept result comes out clean, as a re-meshed one is by construction (a clean
+    // sphere); re-meshed where it would not be manifold or not free of intersections: noise of half an edge in every
+    // direction folds faces over along the surface, which the fit does not unfold, and two spheres that overlap
+    // intersect each other, which a kept mesh keeps as its input had them
     const PipelineResult clean = smooth_mesh(test::icosphere(1.0, 3), o);
     EXPECT_TRUE(clean.report.connectivity_kept);
-    EXPECT_LT(clean.report.fit.mean_face_angle_deg, kAutoKeepFitAngleDeg);
+    EXPECT_TRUE(clean.report.keep_declined.empty()) << clean.report.keep_declined;
+    EXPECT_EQ(clean.report.flipped_faces, 0);
+    EXPECT_TRUE(clean.report.fitted);  // the kept result here is the fit (KeepFilter::Volume)
+    // two boxes that share an edge: four faces on it, non-manifold, so re-meshed at once (its kept result would be)
+    const Mesh touching = test::concat(test::box_mesh({0, 0, 0}, {1, 1, 1}), test::box_mesh({1, 1, 0}, {2, 2, 1}));
+    ASSERT_FALSE(mesh_report(touching).manifold);
+    const PipelineResult edge = smooth_mesh(touching, o);
+    EXPECT_FALSE(edge.report.connectivity_kept);
+    EXPECT_NE(edge.report.keep_declined.find("non-manifold edges"), std::string::npos) << edge.report.keep_declined;
+    EXPECT_FALSE(edge.report.fitted);  // no kept result was made
+    EXPECT_TRUE(mesh_report(edge.mesh).manifold);
     Mesh tangled = test::icosphere(1.0, 3);
     std::uint32_t state = 12345;
     const auto uniform = [&] {  // in [-1, 1), fixed sequence
@@ -429,11 +441,29 @@ TEST(Pipeline, OpenInputKeepsItsMeshClosedInputIsRemeshed) {
         return double(state >> 8) / double(1u << 23) - 1.0;
     };
     for (Vec3f& p : tangled.positions) p = Vec3f(Vec3d(p) + Vec3d(uniform(), uniform(), uniform()) * 0.15);
-    const PipelineResult closed = smooth_mesh(tangled, o);
-    EXPECT_TRUE(closed.report.fitted);
-    EXPECT_GE(closed.report.fit.mean_face_angle_deg, kAutoKeepFitAngleDeg);
+    const PipelineResult folded = smooth_mesh(tangled, o);
+    EXPECT_FALSE(folded.report.connectivity_kept);
+#ifdef NORMALFLOW_TEST_HAS_CGAL
+    EXPECT_NE(folded.report.keep_declined.find("pairs of intersecting faces"), std::string::npos)
+        << folded.report.keep_declined;
+#else  // the faces turned over stand in for the intersections
+    EXPECT_NE(folded.report.keep_declined.find("faces turned over against the surface"), std::string::npos)
+        << folded.report.keep_declined;
+#endif
+    EXPECT_EQ(folded.report.flipped_faces, -1);  // the kept result's report went with it
+    EXPECT_FALSE(folded.report.faces_filtered);
+    EXPECT_TRUE(mesh_report(folded.mesh).closed);
+    EXPECT_NE(to_json(folded.report).dump().find("\"keep_declined\":\""), std::string::npos);
+#ifdef NORMALFLOW_TEST_HAS_CGAL  // the intersections are CGAL's to count
+    const Mesh overlapping = test::concat(test::icosphere(1.0, 3), test::icosphere(1.0, 3, {0.8, 0.0, 0.0}));
+    ASSERT_TRUE(mesh_report(overlapping).closed);
+    const PipelineResult closed = smooth_mesh(overlapping, o);
     EXPECT_FALSE(closed.report.connectivity_kept);
-    EXPECT_TRUE(mesh_report(closed.mesh).closed);
+    EXPECT_NE(closed.report.keep_declined.find("pairs of intersecting faces"), std::string::npos)
+        << closed.report.keep_declined;
+    EXPECT_EQ(closed.report.output_self_intersections, 0);
+    EXPECT_EQ(mesh_report(closed.mesh).components, 1u);  // the union of the two
+#endif
 
     // forced either way
     o.connectivity = Connectivity::Remesh;
