@@ -6,7 +6,6 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
-#include <optional>
 #include <string>
 #include <tuple>
 #include <type_traits>
@@ -726,8 +725,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     // face. On a closed one the engine still runs: the noisy distance of the study's closed pairs (1.3 to 2.3 voxels
     // of noise against 0.6 to 1.1 on the scans) turned faces the filter had right, and the guard moving them back cost
     // 0.1 to 0.55° (docs/history/benchmarks-2026.md, "The stop rule's curves, and the kept mesh without the engine").
-    // It runs wherever its surface is used too: a re-meshed result, the fit, and auto's keep or re-mesh on a closed
-    // input.
+    // It runs wherever its surface is used too: a re-meshed result, and the fit.
     const bool engine = o.smoothing && !(keep && own_faces && open);
     PipelineOptions scan = o;
     scan.smoothing = engine;
@@ -824,7 +822,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     };
     // A closed input kept on its own faces reads the engine's volume only for the guard and the unfolding: the engine
     // stops after its first iteration.
-    const SmoothCheckpoint go_on = [&](const Volume&) { return !keep; };
+    const SmoothCheckpoint go_on = [](const Volume&) { return false; };
     const bool early = own_faces && !open && keep;
     if (bricked)
         v = scan_and_smooth_in_bricks(scan_input, m, r, progress, early ? &go_on : nullptr, bricks);
@@ -840,7 +838,8 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     if (automatic && !open && keep) {
         // Where the kept result has pairs of intersecting faces (or, in a build without CGAL, which cannot count them,
         // faces turned over against the surface, which stand in for them), the input is re-meshed after all, the whole
-        // run again (the kept result's time counted with its extraction).
+        // run again (the first attempt's time, scan conversion and first iteration included, counted with its
+        // extraction).
         std::string defects;
         if (r.output_self_intersections > 0)
             defects = std::to_string(r.output_self_intersections) + " pairs of intersecting faces in the kept result";
