@@ -720,26 +720,34 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         }
     }
     // A mesh kept and filtered on its own faces takes nothing from the engine but the guard's reference below (which
-    // side of the surface each face looks to). On an open input the input's own distance serves that, and the engine
-    // does not run (nor counts in the memory check): on the open scans of the study the result is within 0.02° face by
-    // face. On a closed one the engine still runs: the noisy distance of the study's closed pairs (1.3 to 2.3 voxels
-    // of noise against 0.6 to 1.1 on the scans) turned faces the filter had right, and the guard moving them back cost
-    // 0.1 to 0.55° (docs/history/benchmarks-2026.md, "The stop rule's curves, and the kept mesh without the engine").
-    // It runs wherever its surface is used too: a re-meshed result, and the fit.
+    // side of the surface each face looks to) and the unfolding's (the surface's plane at a fold). On an open input the
+    // input's own distance serves that, and the engine does not run (nor counts in the memory check): on the open
+    // scans of the study the result is within 0.02° face by face. On a closed one the engine runs its first iteration:
+    // the noisy distance of the study's closed pairs (1.3 to 2.3 voxels of noise against 0.6 to 1.1 on the scans)
+    // turned faces the filter had right, and the guard moving them back cost 0.1 to 0.55° (docs/history/
+    // benchmarks-2026.md, "The stop rule's curves, and the kept mesh without the engine"). It runs wherever its surface
+    // is used too: a re-meshed result, and the fit.
     const bool engine = o.smoothing && !(keep && own_faces && open);
     PipelineOptions scan = o;
     scan.smoothing = engine;
-    if (!engine && keep && own_faces && o.scan.resolution == 0 && o.scan.voxel_size == 0) {
-        // The guard's volume alone: it tells which side of the surface a face looks to, by a gradient over two voxels
-        // that the noise cannot turn once a voxel is twice the noise (the automatic resolution puts 0.6 to 1.1 of the
-        // scans' noise in a voxel); it need not be finer than that.
+    if (keep && own_faces && o.scan.resolution == 0 && o.scan.voxel_size == 0) {
+        // The kept mesh's volume tells which side of the surface a face looks to, by a gradient over two voxels that
+        // the noise cannot turn once a voxel is twice the noise (the automatic resolution puts 0.6 to 1.1 of the scans'
+        // noise in a voxel, 1.3 to 2.3 of the closed pairs'); it need not be finer than that. Nor coarser than half the
+        // automatic resolution: the volume must still hold the parts the automatic grid resolves (a fin or a crevice
+        // of the study's vaselion two voxels across at 512 lost 0.17° face by face at 187, none at 250), and the
+        // unfolding moves vertices in its planes. A closed input's engine, which runs here for that volume alone, costs
+        // as its voxels: the study's closed pairs took 2.1 to 4.7 times less time (docs/history/benchmarks-2026.md,
+        // "The kept mesh's grid").
         r.noise = input_noise(m);
         const double longest = bounding_box(m).longest_side();
         const int automatic_resolution = auto_resolution(m, scan);
         scan.scan.resolution = automatic_resolution;
         if (r.noise > 0 && longest > 0)
-            scan.scan.resolution = std::clamp(int(std::ceil(longest / (2 * r.noise))),
-                                              std::min(kAutoResolutionMin, automatic_resolution), automatic_resolution);
+            scan.scan.resolution =
+                std::clamp(int(std::ceil(longest / (2 * r.noise))),
+                           std::max(std::min(kAutoResolutionMin, automatic_resolution), (automatic_resolution + 1) / 2),
+                           automatic_resolution);
     }
     // The engine brick by brick where the whole volume does not fit the memory (or bricks were asked for); not for
     // the fit to the normal map, which reads the engine's last normals.

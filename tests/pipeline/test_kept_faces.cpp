@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -346,11 +347,35 @@ TEST(KeptFaces, AClosedInputKeptOnItsOwnFacesStopsTheEngineAfterItsFirstIteratio
     EXPECT_EQ(smooth_mesh(noisy, o).report.smooth.iterations_run(), all);
 }
 
-TEST(KeptFaces, AnOpenInputsGuardHasVoxelsOfTwiceItsNoise) {
-    // Without the engine the volume is the guard's alone: at the automatic resolution, or coarser so that a voxel is
-    // twice the noise (the gradient over two voxels then sees the surface, not the noise), but no coarser than the
-    // automatic resolution's floor; a resolution given stays
+TEST(KeptFaces, AKeptMeshsVolumeHasVoxelsOfTwiceItsNoise) {
+    // The kept mesh's volume (the guard's alone on an open input, the engine's first iteration on a closed one): at
+    // the automatic resolution, or coarser so that a voxel is twice the noise (the gradient over two voxels then sees
+    // the surface, not the noise), but no coarser than half the automatic resolution nor its floor; a resolution given
+    // stays
     const Mesh sphere = test::icosphere(1.0, 5);
+    const auto check = [&](const Mesh& input, const PipelineOptions& o, bool closed, double sigma) {
+        const PipelineReport r = smooth_mesh(input, o).report;
+        EXPECT_TRUE(r.connectivity_kept);
+        EXPECT_EQ(r.smoothed, closed);  // the engine runs on a closed input only
+        const int automatic = auto_resolution(input, o), resolution = r.scan_options.resolution;
+        const int floor = std::max(kAutoResolutionMin, (automatic + 1) / 2);
+        const double noise = r.noise, h = r.scan.grid.voxel_size;
+        EXPECT_GT(noise, 0.0);
+        EXPECT_GT(automatic, kAutoResolutionMin);
+        const double extent = h * resolution;  // the same box in more or fewer voxels
+        if (2 * noise <= extent / automatic) {
+            EXPECT_EQ(resolution, automatic) << sigma;
+            return 0;
+        }
+        if (2 * noise < extent / floor) {
+            EXPECT_LT(resolution, automatic) << sigma;
+            EXPECT_NEAR(h, 2 * noise, 0.1 * 2 * noise) << sigma;
+            return 1;
+        }
+        EXPECT_EQ(resolution, floor) << sigma;  // no coarser than the floor
+        return floor > kAutoResolutionMin ? 3 : 2;
+    };
+    std::set<int> cases;
     for (const double sigma : {0.1, 0.2, 0.6}) {  // below a voxel; between; beyond the floor
         Mesh noisy = sphere;
         NoiseOptions n;
@@ -358,23 +383,17 @@ TEST(KeptFaces, AnOpenInputsGuardHasVoxelsOfTwiceItsNoise) {
         add_noise(noisy, n);
         const Mesh open = without_cap(noisy);
         PipelineOptions o = kept();
-        const PipelineReport r = smooth_mesh(open, o).report;
-        const int automatic = auto_resolution(open, o), resolution = r.scan_options.resolution;
-        const double noise = r.noise, h = r.scan.grid.voxel_size;
-        ASSERT_GT(noise, 0.0);
-        ASSERT_GT(automatic, kAutoResolutionMin);
-        const double automatic_voxel = h * resolution / automatic;  // the same box in more voxels
-        if (2 * noise <= automatic_voxel) {
-            EXPECT_EQ(resolution, automatic) << sigma;
-        } else if (2 * noise < h * resolution / kAutoResolutionMin) {
-            EXPECT_LT(resolution, automatic) << sigma;
-            EXPECT_NEAR(h, 2 * noise, 0.1 * 2 * noise) << sigma;
-        } else {
-            EXPECT_EQ(resolution, kAutoResolutionMin) << sigma;  // no coarser than the floor
-        }
+        cases.insert(check(open, o, false, sigma));
         o.scan.resolution = 100;
         EXPECT_EQ(smooth_mesh(open, o).report.scan_options.resolution, 100);
+        if (sigma == 0.6) {
+            // closed, with a length unit that puts the automatic resolution at 300: its half binds
+            o.scan.resolution = 0;
+            o.length_scale = kAutoVoxelsPerLength * bounding_box(noisy).longest_side() / 300;
+            cases.insert(check(noisy, o, true, sigma));
+        }
     }
+    EXPECT_EQ(cases, (std::set<int>{0, 1, 2, 3}));  // each branch of the rule, the half of the automatic included
 }
 
 TEST(NoiseScale, AutoSigmaSpatialIsTwiceTheNoiseWithinAVoxelAndTheFixedValue) {
