@@ -96,8 +96,8 @@ std::vector<OptionSpec> make_table() {
     const std::string auto_res = "voxels along the longest side (auto: " + shortest(kAutoVoxelsPerLength, false) +
                                  " per length unit, " + std::to_string(kAutoResolutionMin) + " to " +
                                  std::to_string(kAutoResolutionMax) +
-                                 ", within the memory available; an open input kept on its own faces, where the grid "
-                                 "only guards, coarser down to voxels of twice its noise)";
+                                 ", within the memory available; a mesh kept on its own faces, where the grid only "
+                                 "guards, coarser down to voxels of twice its noise, at most by half)";
     const std::string iterations = "main iterations, each a filtering of the normal map and a refit (auto: up to " +
                                    std::to_string(default_iterations(SmoothMode::Bilateral)) +
                                    " for bilateral, guided and tv, fewer once the normal map is smooth; " +

@@ -2,7 +2,7 @@
 // very same signed distance volume (issue 4).
 //
 //   nf_bench_vs_itk [--resolution 256] [--iterations 2] [--refit 100] [--itk-threads 2]
-//                   [--nf-threads 1,2] [--modes isotropic,anisotropic] [--mu 0.1] [--samples 100000]
+//                   [--nf-threads 1,2] [--modes isotropic,anisotropic,default] [--mu 0.1] [--samples 100000]
 //                   [--no-itk] [mesh ...]          (default mesh: shared/data/pairs_gnf/fandisk_n0.3.ply)
 //
 // 1. mesh_to_volume (pipeline/, the shipped pipeline's first half: repair, scan conversion with the
@@ -10,7 +10,10 @@
 //    outside the band, is written into a dense itk::Image<float, 3> of spacing 1.
 // 2. ITK: itk::IsotropicFourthOrderLevelSetImageFilter / AnisotropicFourthOrderLevelSetImageFilter.
 // 3. normalflow: smooth_volume on a copy of the Volume, 1 and 2 threads (the engine alone is timed
-//    against ITK's filter, so this step calls smooth_volume itself).
+//    against ITK's filter, so this step calls smooth_volume itself). Mode "default": the default
+//    smoothing's engine (engine_options of the default PipelineOptions on this grid: bilateral, its
+//    filter sized from the mesh's length scale and noise) for the same number of main iterations, against
+//    ITK's anisotropic filter (the paper's iteration; run once for both where both modes are asked).
 // Prints Markdown tables: seconds per main iteration (wall and process CPU; and wall with the set-up
 // before the first main iteration left out: ITK's copy of the image and construction of its layers,
 // timed up to its first InitializeIteration, and normalflow's initial band move and
@@ -61,6 +64,7 @@
 #include "core/volume.h"
 #include "extract/extract_surface.h"
 #include "io/io.h"
+#include "metrics/noise.h"
 #include "metrics/surface_distance.h"
 #include "normals/smooth.h"
 #include "pipeline/pipeline.h"
@@ -282,8 +286,9 @@ int main(int argc, char** argv) {
         return 2;
     }
     for (const auto& mode : modes)
-        if (mode != "isotropic" && mode != "anisotropic") {
-            std::fprintf(stderr, "nf_bench_vs_itk: --modes takes isotropic and/or anisotropic, not %s\n", mode.c_str());
+        if (mode != "isotropic" && mode != "anisotropic" && mode != "default") {
+            std::fprintf(stderr, "nf_bench_vs_itk: --modes takes isotropic, anisotropic and/or default, not %s\n",
+                         mode.c_str());
             return 2;
         }
     if (meshes.empty()) meshes.push_back(std::string(NORMALFLOW_TEST_DATA) + "/pairs_gnf/fandisk_n0.3.ply");
@@ -295,6 +300,7 @@ int main(int argc, char** argv) {
     try {
         for (const std::string& path : meshes) {
             const Mesh mesh = read_mesh(path);
+            const double noise = estimate_noise(mesh, NoiseNormals::Steady).sigma;  // the default's filter scale
             // The shipped pipeline's first half (pipeline/ mesh_to_volume: repair, scan conversion
             // with the default distance query, the 3-voxel band of a smoothing run).
             PipelineOptions po;
@@ -350,10 +356,12 @@ int main(int argc, char** argv) {
             };
             std::vector<std::string> agreement;
             for (const std::string& mode : modes) {
-                const bool aniso = mode == "anisotropic";
+                const bool default_engine = mode == "default";
+                const bool aniso = mode == "anisotropic" || default_engine;  // ITK's side of the default: the paper's
                 Volume itk_result;
                 bool have_itk = false;
-                if (run_itk) {
+                const bool itk_aniso_done = have_itk_row && itk_row.name.find("Anisotropic") != std::string::npos;
+                if (run_itk && !(default_engine && itk_aniso_done)) {
                     Image::Pointer img = to_itk(input);
                     Row r;
                     r.name = "ITK " + std::string(aniso ? "AnisotropicFourthOrderLevelSetImageFilter"
@@ -406,15 +414,20 @@ int main(int argc, char** argv) {
                 bool identical = true;
                 for (int t : nf_threads) {
                     SmoothOptions o;
-                    o.mode = aniso ? SmoothMode::Anisotropic : SmoothMode::Isotropic;
-                    o.iterations = iterations;
-                    o.normal_steps = 25;
-                    o.normal_dt = 1.0f / 6.0f;
-                    o.refit_dt = 1.0f / 6.0f;
-                    o.refit_max_steps = refit;
-                    o.refit_tolerance = 0;
-                    o.mu = mu;
-                    o.conductance_presmooth_steps = 0;
+                    if (default_engine) {
+                        o = engine_options(PipelineOptions{}, h, model_length_scale(mesh), noise);
+                        o.iterations = iterations;
+                    } else {
+                        o.mode = aniso ? SmoothMode::Anisotropic : SmoothMode::Isotropic;
+                        o.iterations = iterations;
+                        o.normal_steps = 25;
+                        o.normal_dt = 1.0f / 6.0f;
+                        o.refit_dt = 1.0f / 6.0f;
+                        o.refit_max_steps = refit;
+                        o.refit_tolerance = 0;
+                        o.mu = mu;
+                        o.conductance_presmooth_steps = 0;
+                    }
                     o.threads = t;
                     Volume v = input;
                     SmoothReport rep;
@@ -427,7 +440,8 @@ int main(int argc, char** argv) {
                     int refits = 0;
                     for (const SmoothIteration& it : rep.iterations) refits += it.refit_steps;
                     char buf[64];
-                    std::snprintf(buf, sizeof buf, "25 / %.1f", double(refits) / std::max(rep.iterations_run(), 1));
+                    std::snprintf(buf, sizeof buf, "%d / %.1f", o.normal_steps,
+                                  double(refits) / std::max(rep.iterations_run(), 1));
                     r.steps = buf;
                     print_row(r);
                     if (first_values.empty())
