@@ -118,7 +118,7 @@ double check_memory(const Mesh& mesh, const PipelineOptions& o) {
     const double longest = bounding_box(mesh).longest_side();
     const double h = s.voxel_size > 0 ? s.voxel_size : longest / s.resolution;
     if (!(h > 0) || !std::isfinite(h)) return 0;
-    const MemoryEstimate e = estimate_memory(mesh, h, o.smoothing ? kEngineBandVoxels : s.half_width);
+    const MemoryEstimate e = estimate_memory(mesh, h, s.half_width);
     const double need = e.total(o.smoothing);
     const std::size_t limit = o.max_memory_bytes > 0 ? o.max_memory_bytes : available_memory_bytes();
     if (limit > 0 && need > double(limit))
@@ -320,7 +320,7 @@ SmoothOptions engine_options(const PipelineOptions& o, double voxel_size, double
 BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int halo_voxels) {
     BrickPlan plan;
     const ScanConvertOptions s = effective_scan_options(o);
-    const MemoryEstimate e = estimate_memory(m, h, kEngineBandVoxels);
+    const MemoryEstimate e = estimate_memory(m, h, s.half_width);
     if (o.brick_voxels == 0) {
         try {
             plan.estimate_bytes = check_memory(m, o);
@@ -331,13 +331,15 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
     ScanConvertOptions grid_options = s;
     grid_options.voxel_size = h;
     const Grid grid = scan_grid(m, grid_options);
-    // The engine's bytes per unit of area (smooth_bytes without the block table), the result's band per copy
-    // (φ alone: one float of the engine's 17), the mesh with its search trees.
-    const double engine_per_area = (e.smooth_bytes - e.grid_samples / 512 * 4) / std::max(1e-300, e.surface_blocks);
-    const double band_bytes = (e.smooth_bytes - e.grid_samples / 512 * 4) / 17.0 + e.grid_samples / 512 * 4;
-    const double mesh_bytes = double(m.positions.size()) * 12 + double(m.triangles.size()) * 160;
-    // voxels: the cells the input's area is binned into (at most 256 along the longest axis)
-    const int kCell = std::max(32, (std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) + 255) / 256);
+    // The engine's arrays of a window, its share of the whole run's (engine_bytes without the block table and the
+    // rounding); the result's band per copy (φ alone: one float of the engine's samples), the mesh with its trees.
+    const double table_bytes = e.grid_samples / 512 * 4;
+    const double engine_arrays = e.engine_bytes - table_bytes - kEngineRoundingBytes;
+    const double band_bytes = e.engine_blocks * 512 * 4 + table_bytes;
+    const double mesh_bytes = e.mesh_bytes;
+    // voxels: the cells the input's area is binned into, a block where the grid is at most 2048 voxels long (the windows
+    // are whole blocks), at most 256 cells along the longest axis beyond
+    const int kCell = std::max(kBlockDim, (std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) + 255) / 256);
     const AreaGrid area = bin_area(m, grid, kCell);
     const auto estimate = [&](int brick) {
         // the largest area one window holds (the cells it touches), in the estimate's surface blocks
@@ -351,7 +353,7 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
                                                  {i0 + brick_cells + halo_cells + 1, j0 + brick_cells + halo_cells + 1,
                                                   k0 + brick_cells + halo_cells + 1}));
         const double share = area.total > 0 ? worst / area.total : 1.0;
-        return mesh_bytes + 2 * band_bytes + share * e.surface_blocks * engine_per_area;
+        return mesh_bytes + 2 * band_bytes + kEngineRoundingBytes + share * engine_arrays;
     };
     double smallest = 0;
     int tried = 0;

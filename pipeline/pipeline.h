@@ -47,8 +47,7 @@ const char* to_string(DistanceQuery q);
 /// smooth_volume rebuilds its own 8-voxel band (kEngineBandVoxels) from the surface, so a
 /// 3-voxel band holds all it reads.
 inline constexpr float kSmoothingScanBandVoxels = 3.0f;
-/// Band half-width, voxels, of the volume smooth_volume returns (see smooth.h); the memory
-/// estimate of a smoothing run uses it.
+/// Band half-width, voxels, of the volume smooth_volume returns (see smooth.h).
 inline constexpr float kEngineBandVoxels = 8.0f;
 
 /// scan.resolution = 0 (and no voxel size): the resolution is chosen from the input,
@@ -505,8 +504,9 @@ int auto_resolution(const Mesh& m, const PipelineOptions& options);
 /// The bricks a smoothing run of m takes (PipelineOptions::brick_voxels): their side in voxels (0: none, the whole
 /// volume at once) and the estimated peak. With brick_voxels = 0, none where the whole run's estimate (check_memory)
 /// fits the limit; otherwise the largest side of 512, 384, 256, 192, 128, 96 or 64 voxels whose estimate fits: the
-/// mesh and its search trees, two copies of the result's band (φ only) and one brick's engine, sized by the largest
-/// area of the input that one window (brick and halo) holds. halo_voxels: the halo the engine needs (voxels).
+/// mesh and its search trees, two copies of the result's band (φ only: the last pass's, which the windows read, and
+/// this one's) and one brick's engine, sized by the largest area of the input that one window (brick and halo) holds.
+/// halo_voxels: the halo the engine needs (voxels).
 /// \throw OutOfMemory when no brick size fits (the message names the limit and the smallest estimate).
 struct BrickPlan {
     int brick_voxels = 0;

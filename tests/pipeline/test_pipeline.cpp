@@ -18,6 +18,7 @@
 #include "io/io.h"
 #include "metrics/surface_distance.h"
 #include "pipeline/report_json.h"
+#include "sdf/memory_estimate.h"
 #include "sdf/sdf_test_meshes.h"
 #include "support/attributed_mesh.h"
 #include "support/test_files.h"
@@ -232,6 +233,41 @@ TEST(Pipeline, AutomaticResolutionFollowsTheLengthScaleAndTheMemory) {
     EXPECT_DOUBLE_EQ(smooth_mesh(sphere, o).report.length_scale, 0.1);
     o.length_scale = 0;
     EXPECT_NEAR(smooth_mesh(sphere, o).report.length_scale, ell, 1e-12);
+}
+
+// The memory estimate counts the blocks the engine allocates from the surface's crossings of the block grid: on a
+// sphere, a torus and a box (axis-aligned, then turned) the engine's first iteration allocates at most as many blocks
+// as estimated and more than half of them, and the run's estimate covers its arrays.
+TEST(Pipeline, TheMemoryEstimateCountsTheEnginesBlocks) {
+    Mesh turned = test::box_mesh({-1, -0.6, -0.4}, {1, 0.6, 0.4});
+    for (Vec3f& p : turned.positions) {  // 30° about z, then 20° about x
+        const double c = std::cos(0.5236), s = std::sin(0.5236), c2 = std::cos(0.349), s2 = std::sin(0.349);
+        const Vec3d q(c * p[0] - s * p[1], s * p[0] + c * p[1], p[2]);
+        p = Vec3f(Vec3d(q[0], c2 * q[1] - s2 * q[2], s2 * q[1] + c2 * q[2]));
+    }
+    const std::pair<const char*, Mesh> shapes[] = {{"sphere", test::icosphere(1.0, 4)},
+                                                   {"torus", test::torus_mesh(1.0, 0.3, 96, 32)},
+                                                   {"box", test::box_mesh({-1, -0.6, -0.4}, {1, 0.6, 0.4})},
+                                                   {"turned box", turned}};
+    for (const auto& [name, m] : shapes) {
+        for (const int res : {64, 128}) {
+            PipelineOptions o;
+            o.scan.resolution = res;
+            o.smooth.iterations = 1;
+            o.smooth.normal_steps = 2;
+            PipelineReport rep;
+            (void)smooth_mesh_to_volume(m, o, &rep);
+            ASSERT_FALSE(rep.smooth.iterations.empty()) << name;
+            const double h = bounding_box(m).longest_side() / res;
+            const MemoryEstimate e = estimate_memory(m, h, effective_scan_options(o).half_width);
+            const double allocated = double(rep.smooth.iterations[0].allocated_voxels) / 512;
+            std::printf("%s at %d: %.0f blocks allocated, %.0f estimated (%.0f crossed)\n", name, res, allocated,
+                        e.engine_blocks, e.surface_blocks);
+            EXPECT_LE(allocated, e.engine_blocks) << name << " at " << res;
+            EXPECT_GT(allocated, 0.5 * e.engine_blocks) << name << " at " << res;
+            EXPECT_GE(rep.memory_estimate_bytes, allocated * 512 * kEngineBytesPerSample) << name << " at " << res;
+        }
+    }
 }
 
 TEST(Pipeline, MemoryLimitRefusesWithOutOfMemory) {
