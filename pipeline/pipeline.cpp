@@ -331,12 +331,10 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
     ScanConvertOptions grid_options = s;
     grid_options.voxel_size = h;
     const Grid grid = scan_grid(m, grid_options);
-    // The engine's arrays of a window, its share of the whole run's (engine_bytes without the block table and the
-    // rounding); the result's band per copy (φ alone: one float of the engine's samples), the mesh with its trees.
-    const double table_bytes = e.grid_samples / 512 * 4;
-    const double engine_arrays = e.engine_bytes - table_bytes - kEngineRoundingBytes;
-    const double band_bytes = e.engine_blocks * 512 * 4 + table_bytes;
-    const double mesh_bytes = e.mesh_bytes;
+    // The whole run's engine arrays, of which a window holds its share; the result's band per copy (φ alone: one float
+    // of the engine's samples, and the block table).
+    const double engine_arrays = e.engine_blocks * 512 * kEngineBytesPerSample;
+    const double band_bytes = e.engine_blocks * 512 * 4 + e.grid_samples / 512 * 4;
     // voxels: the cells the input's area is binned into, a block where the grid is at most 2048 voxels long (the windows
     // are whole blocks), at most 256 cells along the longest axis beyond
     const int kCell = std::max(kBlockDim, (std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) + 255) / 256);
@@ -353,7 +351,7 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
                                                  {i0 + brick_cells + halo_cells + 1, j0 + brick_cells + halo_cells + 1,
                                                   k0 + brick_cells + halo_cells + 1}));
         const double share = area.total > 0 ? worst / area.total : 1.0;
-        return mesh_bytes + 2 * band_bytes + kEngineRoundingBytes + share * engine_arrays;
+        return e.mesh_bytes + 2 * band_bytes + kEngineRoundingBytes + share * engine_arrays;
     };
     double smallest = 0;
     int tried = 0;

@@ -35,10 +35,10 @@ struct MemoryEstimate {
 /// engine, the band it starts from), and for smoothing it afterwards. A plane of unit normal n crosses
 /// (|n_x| + |n_y| + |n_z|) / b² blocks of side b per unit of area; the engine allocates the blocks the surface passes
 /// through and their 26 neighbours, at most three times as many (a layer on either side along every axis the plane
-/// crosses). On the study's noisy inputs at resolutions 256 and 512
-/// the engine allocated 2.0 to 2.8 times the blocks crossed, and the estimate of the whole run came within 0.98 to
-/// 1.25 of its measured peak (docs/history/benchmarks-2026.md, "The memory estimate"). Errs on the high side for
-/// meshes with overlapping components (their areas add).
+/// crosses). On the study's noisy inputs at resolutions 256 and 512 the engine allocated 2.0 to 2.8 times the blocks
+/// crossed, and the estimate of the whole run came within 0.98 to 1.25 of its measured peak
+/// (docs/history/benchmarks-2026.md, "The memory estimate"). Errs on the high side for meshes with overlapping
+/// components (their areas add).
 inline MemoryEstimate estimate_memory(const Mesh& m, double h, float half_width) {
     MemoryEstimate e;
     double crossing = 0;
