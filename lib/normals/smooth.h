@@ -127,6 +127,12 @@ struct SmoothOptions {
     bool defer_volume_shift = false;
     std::array<int, 3> window_lo{0, 0, 0};
     std::array<int, 3> window_hi{0, 0, 0};
+    /// Voxels: where the volume's sample (0, 0, 0) lies in the grid it is a window of (smooth_in_bricks: the window's
+    /// lower corner), a multiple of the filters' sample stride. The neighbourhood filters take their surface points
+    /// in that grid's coordinates, so that a window's points, and the sums over them, are the whole grid's bit for
+    /// bit: in its own coordinates a point's rounding differs, and a neighbour at the edge of the disc or a tie for
+    /// the nearest sample can go the other way.
+    std::array<int, 3> sample_origin{0, 0, 0};
     /// false: the volume is what smooth_volume returned (its band and φ a signed distance out to the half width, as
     /// a run leaves them), and the first iteration reads it as it is instead of reinitialising it first. A run in
     /// steps (smooth_in_bricks, one iteration at a time) then reads φ as the one run would have.

@@ -112,7 +112,7 @@ void SurfaceSampleFilter::filter_normals(StageContext& c) {
     d.r2 = d.radius * d.radius;
     d.ks = 1.0f / (2.0f * d.sigma_s * d.sigma_s);
     d.kr = 1.0f / (2.0f * c.opt.sigma_range * c.opt.sigma_range);
-    S_.build(band, w.normals, kShell, d.radius, c.opt.active_band, stride(c.opt, d.ell));
+    S_.build(band, w.normals, kShell, d.radius, c.opt.active_band, stride(c.opt, d.ell), c.opt.sample_origin);
     c.record().filter_points = std::size_t(
         std::count_if(S_.index.begin(), S_.index.end(), [](std::size_t i) { return i != SurfaceSamples::kPadding; }));
     const std::size_t n = S_.size();
@@ -216,26 +216,42 @@ void SurfaceSampleFilter::gather_near(std::int32_t b, const Field3& r, const Fie
     pair_sum(S_.arrays(r, v), spans.data(), int(spans.size()), q, rq, ks, kr, r2, acc);
 }
 
-/// The surface sample nearest to q among the blocks near b within √best (the smallest index among
-/// equally near ones, so the answer does not depend on the order the blocks are visited in);
+/// The surface sample nearest to q among the blocks near b within √best (among equally near ones the
+/// first by its block's coordinates, so that the answer depends neither on the order the blocks are
+/// visited in nor on the slots they hold);
 /// kPadding when none is. The block holding q is searched first, so that the others are mostly
 /// culled by their boxes.
 std::size_t SurfaceSampleFilter::nearest_sample(const Band& band, std::int32_t b, const float q[3], float best) const {
     std::size_t at = SurfaceSamples::kPadding;
+    // among equally near samples the first in the order of their blocks' coordinates, then their order in the block:
+    // the same in a window as in the whole grid
+    const auto before = [&](std::size_t j, std::size_t k) {
+        const std::int32_t bj = std::int32_t(S_.index[j] / kBlockVoxels), bk = std::int32_t(S_.index[k] / kBlockVoxels);
+        if (bj == bk) return j < k;
+        const auto &p = band.block_coord(std::size_t(bj)), &r = band.block_coord(std::size_t(bk));
+        return std::tie(p[2], p[1], p[0]) < std::tie(r[2], r[1], r[0]);
+    };
     auto scan = [&](std::int32_t b2) {
         for (std::size_t j = S_.begin(b2); j < S_.end(b2); ++j) {
             const float dx = S_.p[0][j] - q[0], dy = S_.p[1][j] - q[1], dz = S_.p[2][j] - q[2];
             const float d2 = (dx * dx + dy * dy) + dz * dz;
-            if (d2 < best || (d2 == best && j < at)) {
+            if (d2 < best || (d2 == best && S_.index[j] != SurfaceSamples::kPadding &&
+                              (at == SurfaceSamples::kPadding || before(j, at)))) {
                 best = d2;
                 at = j;
             }
         }
     };
-    const auto cell = [](float v) { return int(std::floor(std::round(v) / float(kBlockDim))); };
-    const std::int32_t home = band.block_at(cell(q[0]), cell(q[1]), cell(q[2]));
+    // (the points are in the frame of S_.origin(), a multiple of the block's side)
+    const std::array<int, 3>& o = S_.origin();
+    const auto cell = [](float v, int o) { return int(std::floor(std::round(v) / float(kBlockDim))) - o / kBlockDim; };
+    const std::int32_t home = band.block_at(cell(q[0], o[0]), cell(q[1], o[1]), cell(q[2], o[2]));
     const std::vector<std::int32_t>& near = S_.near(b);
-    const bool home_near = home >= 0 && std::binary_search(near.begin(), near.end(), home);
+    const auto by_coords = [&](std::int32_t a, std::int32_t c) {  // near's order
+        const auto &p = band.block_coord(std::size_t(a)), &r = band.block_coord(std::size_t(c));
+        return std::tie(p[2], p[1], p[0]) < std::tie(r[2], r[1], r[0]);
+    };
+    const bool home_near = home >= 0 && std::binary_search(near.begin(), near.end(), home, by_coords);
     if (home_near) scan(home);
     for (std::int32_t b2 : near)
         if ((b2 != home || !home_near) && S_.box_distance2(b2, q) <= best) scan(b2);
@@ -286,6 +302,7 @@ void SurfaceSampleFilter::extend(StageContext& c, const Disc& d) {
     if (!at_q) filter_pass(band, range, d, next_);
     band.for_blocks(band.active(), 0, [&](std::size_t, std::int32_t b, Scratch&) {
         const auto& bc = band.block_coord(std::size_t(b));
+        const std::array<int, 3>& o0 = c.opt.sample_origin;
         const std::size_t base = std::size_t(b) * kBlockVoxels;
         float acc[32];
         for (int z = 0; z < kBlockDim; ++z)
@@ -293,9 +310,9 @@ void SurfaceSampleFilter::extend(StageContext& c, const Disc& d) {
                 for (int x = 0; x < kBlockDim; ++x) {
                     const std::size_t i = base + std::size_t(bidx(x, y, z));
                     if (!mask[i] || S_.taken(band, std::size_t(b), x, y, z, phi[i])) continue;
-                    const float q[3] = {float(bc[0] * kBlockDim + x) - phi[i] * w.normals[0][i],
-                                        float(bc[1] * kBlockDim + y) - phi[i] * w.normals[1][i],
-                                        float(bc[2] * kBlockDim + z) - phi[i] * w.normals[2][i]};
+                    const float q[3] = {float(o0[0] + bc[0] * kBlockDim + x) - phi[i] * w.normals[0][i],
+                                        float(o0[1] + bc[1] * kBlockDim + y) - phi[i] * w.normals[1][i],
+                                        float(o0[2] + bc[2] * kBlockDim + z) - phi[i] * w.normals[2][i]};
                     const std::size_t at = nearest_sample(band, b, q, d.r2);
                     if (at == SurfaceSamples::kPadding) continue;  // nothing within reach: keep N
                     const float rq[3] = {range[0][at], range[1][at], range[2][at]};

@@ -12,8 +12,10 @@ namespace {
 constexpr float kFar = 1.0e9f;  // padding position: no query is within reach of it
 }
 
-void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, float reach, float margin, int stride) {
+void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, float reach, float margin, int stride,
+                           std::array<int, 3> origin) {
     stride_ = std::max(1, stride);
+    origin_ = origin;
     tau_ = tau * float(stride_);
     tau = tau_;
     const std::size_t nb = band.nblocks();
@@ -68,9 +70,9 @@ void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, f
                     const std::size_t i = base + std::size_t(bidx(x, y, z));
                     if (!(mask[i] && taken(band, b, x, y, z, phi[i]))) return;
                     const float nx = normals[0][i], ny = normals[1][i], nz = normals[2][i];
-                    p[0][o] = float(bc[0] * kBlockDim + x) - phi[i] * nx;
-                    p[1][o] = float(bc[1] * kBlockDim + y) - phi[i] * ny;
-                    p[2][o] = float(bc[2] * kBlockDim + z) - phi[i] * nz;
+                    p[0][o] = float(origin[0] + bc[0] * kBlockDim + x) - phi[i] * nx;
+                    p[1][o] = float(origin[1] + bc[1] * kBlockDim + y) - phi[i] * ny;
+                    p[2][o] = float(origin[2] + bc[2] * kBlockDim + z) - phi[i] * nz;
                     n[0][o] = nx;
                     n[1][o] = ny;
                     n[2][o] = nz;
@@ -118,7 +120,6 @@ void SurfaceSamples::build(const Band& band, const Field3& normals, float tau, f
                             const float gx = gap(dx), gy = gap(dy), gz = gap(dz);
                             if (gx * gx + gy * gy + gz * gz <= lim * lim) out.push_back(s);
                         }
-                std::sort(out.begin(), out.end());
             }
         });
 }

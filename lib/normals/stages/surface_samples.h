@@ -32,24 +32,32 @@ public:
     /// With stride s > 1, only the samples whose grid coordinates are all multiples of s, with
     /// |φ| <= tau·s: about 1/s² as many points, as densely spread over the surface in units of s
     /// voxels as stride 1 in voxels.
-    void build(const Band& band, const Field3& normals, float tau, float reach, float margin, int stride = 1);
+    /// `origin`: the grid coordinates of the band's sample (0, 0, 0) in the frame the points are given in (a window
+    /// of a larger grid: its lower corner in that grid, so that its points and their order are the larger grid's bit
+    /// for bit); a multiple of the stride.
+    void build(const Band& band, const Field3& normals, float tau, float reach, float margin, int stride = 1,
+               std::array<int, 3> origin = {0, 0, 0});
     /// Whether band sample x, y, z of block b (φ = v) is one of the points (build's rule).
     bool taken(const Band& band, std::size_t b, int x, int y, int z, float v) const {
         if (!(std::abs(v) <= tau_)) return false;
         if (stride_ == 1) return true;
         const auto& bc = band.block_coord(b);
-        return (bc[0] * kBlockDim + x) % stride_ == 0 && (bc[1] * kBlockDim + y) % stride_ == 0 &&
-               (bc[2] * kBlockDim + z) % stride_ == 0;
+        return (origin_[0] + bc[0] * kBlockDim + x) % stride_ == 0 &&
+               (origin_[1] + bc[1] * kBlockDim + y) % stride_ == 0 &&
+               (origin_[2] + bc[2] * kBlockDim + z) % stride_ == 0;
     }
 
     std::size_t size() const { return index.size(); }
+    /// build's origin: the points' coordinates less it are the band's own.
+    const std::array<int, 3>& origin() const { return origin_; }
     static constexpr int kRuns = 8;  ///< runs per block: its 4³ octants
 
     /// The samples of block slot b: [begin(b), end(b)), its runs one after the other (padding
     /// included).
     std::size_t begin(std::int32_t b) const { return std::size_t(off_[std::size_t(b) * kRuns]); }
     std::size_t end(std::int32_t b) const { return std::size_t(off_[(std::size_t(b) + 1) * kRuns]); }
-    /// The blocks within reach of active block b (itself included), ascending.
+    /// The blocks within reach of active block b (itself included), in the order of their coordinates (z, then y,
+    /// then x): the same order in a window as in the whole grid, whatever slots the blocks hold.
     const std::vector<std::int32_t>& near(std::int32_t b) const { return near_[std::size_t(b)]; }
     /// Squared distance from q to the bounding box of block b's points: a lower bound of
     /// |q − p_j|² over them (infinite for a block without samples).
@@ -128,6 +136,7 @@ private:
 
     float tau_ = 0;  // |φ| of the points at most
     int stride_ = 1;
+    std::array<int, 3> origin_{0, 0, 0};
     std::vector<std::int64_t> off_;                      // run k of block b starts at off_[b·kRuns + k]
     std::vector<std::array<float, 3>> box_lo_, box_hi_;  // per block: its kRuns runs' boxes, then its own
     std::vector<std::vector<std::int32_t>> near_;

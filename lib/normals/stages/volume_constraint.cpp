@@ -61,7 +61,7 @@ void window_volume(const Band& band, const std::array<int, 3>& lo, const std::ar
 
 float restore_volume(Band& band, double target) {
     float shift = 0.0f;  // φ ← φ + shift; the volume falls as shift grows
-    for (int it = 0; it < 2; ++it) {
+    for (int it = 0; it < kVolumeNewtonSteps; ++it) {
         double v, a;
         volume_and_slope(band, shift, v, a);
         if (!(a > 0.0)) break;

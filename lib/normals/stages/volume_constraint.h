@@ -20,8 +20,11 @@ double active_volume(const Band& band);
 void window_volume(const Band& band, const std::array<int, 3>& lo, const std::array<int, 3>& hi, double& volume,
                    double& slope);
 
+/// Newton steps restore_volume takes (and smooth_in_bricks after it, over the whole surface).
+inline constexpr int kVolumeNewtonSteps = 2;
+
 /// Shifts φ on every allocated sample by one constant so that active_volume(band) comes back to
-/// `target` (two Newton steps on the piecewise-linear volume; none when no sample is within half
+/// `target` (kVolumeNewtonSteps Newton steps on the piecewise-linear volume; none when no sample is within half
 /// a voxel of the surface). Returns the shift, voxels (positive: the surface moved outwards).
 float restore_volume(Band& band, double target);
 
