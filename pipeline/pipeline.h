@@ -44,11 +44,9 @@ enum class DistanceQuery {
 const char* to_string(DistanceQuery q);
 
 /// Band half-width, voxels, that scan conversion uses at least when smooth_volume runs next:
-/// smooth_volume rebuilds its own 8-voxel band (kEngineBandVoxels) from the surface, so a
-/// 3-voxel band holds all it reads.
+/// smooth_volume rebuilds its own 8-voxel band (engine::kHalfWidth, lib/band/layout.h) from the
+/// surface, so a 3-voxel band holds all it reads.
 inline constexpr float kSmoothingScanBandVoxels = 3.0f;
-/// Band half-width, voxels, of the volume smooth_volume returns (see smooth.h).
-inline constexpr float kEngineBandVoxels = 8.0f;
 
 /// scan.resolution = 0 (and no voxel size): the resolution is chosen from the input,
 /// kAutoVoxelsPerLength voxels per model length unit along the longest side, clamped to

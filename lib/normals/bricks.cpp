@@ -222,10 +222,6 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
     return result;
 }
 
-}  // namespace
-
-namespace {
-
 /// The shift (voxels; φ ← φ + shift) that gives the volume back, with the whole run's Newton steps (restore_volume):
 /// the first from the volume the bricks' interiors gained and its slope, the others from the change a shift makes
 /// on the samples within half a voxel of the surface, all of which an engine's active band holds. With the first step
@@ -238,8 +234,8 @@ float volume_shift(const Volume& v, double gained, double slope) {
         for (const float x : v.values) {
             const float f = x / h;
             if (!(std::abs(f) < 0.5f + std::abs(shift))) continue;
-            change += double(std::clamp(0.5f - (f + shift), 0.0f, 1.0f) - std::clamp(0.5f - f, 0.0f, 1.0f));
-            at += std::abs(f + shift) < 0.5f ? 1.0 : 0.0;
+            change += double(engine::inside_share(f + shift) - engine::inside_share(f));
+            at += engine::on_slope(f + shift) ? 1.0 : 0.0;
         }
         if (!(at > 0.0)) break;
         shift += float((gained + change) / at);

@@ -194,7 +194,6 @@ TEST(FastEngine, AWindowTakesItsPointsInItsGridsCoordinates) {
             }
     SmoothOptions o = bilateral(4.0f);
     o.iterations = 1;
-    Volume window = v0;
     smooth_volume(far, o);
     const auto differing = [&](const Volume& v) {
         std::size_t n = 0;
@@ -204,7 +203,7 @@ TEST(FastEngine, AWindowTakesItsPointsInItsGridsCoordinates) {
                     n += v.value(i, j, k) != far.value(i + kOffsetBlocks * kBlockDim, j, k);
         return n;
     };
-    Volume own = v0;
+    Volume own = v0, window = v0;
     smooth_volume(own, o);
     o.sample_origin = {kOffsetBlocks * kBlockDim, 0, 0};
     smooth_volume(window, o);

@@ -223,13 +223,15 @@ void SurfaceSampleFilter::gather_near(std::int32_t b, const Field3& r, const Fie
 /// culled by their boxes.
 std::size_t SurfaceSampleFilter::nearest_sample(const Band& band, std::int32_t b, const float q[3], float best) const {
     std::size_t at = SurfaceSamples::kPadding;
-    // among equally near samples the first in the order of their blocks' coordinates, then their order in the block:
-    // the same in a window as in the whole grid
+    // blocks in the order of their coordinates (near's order): the same in a window as in the whole grid
+    const auto by_coords = [&](std::int32_t a, std::int32_t c) {
+        const auto &p = band.block_coord(std::size_t(a)), &r = band.block_coord(std::size_t(c));
+        return std::tie(p[2], p[1], p[0]) < std::tie(r[2], r[1], r[0]);
+    };
+    // among equally near samples the first by its block's coordinates, then by its order in the block
     const auto before = [&](std::size_t j, std::size_t k) {
         const std::int32_t bj = std::int32_t(S_.index[j] / kBlockVoxels), bk = std::int32_t(S_.index[k] / kBlockVoxels);
-        if (bj == bk) return j < k;
-        const auto &p = band.block_coord(std::size_t(bj)), &r = band.block_coord(std::size_t(bk));
-        return std::tie(p[2], p[1], p[0]) < std::tie(r[2], r[1], r[0]);
+        return bj == bk ? j < k : by_coords(bj, bk);
     };
     auto scan = [&](std::int32_t b2) {
         for (std::size_t j = S_.begin(b2); j < S_.end(b2); ++j) {
@@ -247,10 +249,6 @@ std::size_t SurfaceSampleFilter::nearest_sample(const Band& band, std::int32_t b
     const auto cell = [](float v, int o) { return int(std::floor(std::round(v) / float(kBlockDim))) - o / kBlockDim; };
     const std::int32_t home = band.block_at(cell(q[0], o[0]), cell(q[1], o[1]), cell(q[2], o[2]));
     const std::vector<std::int32_t>& near = S_.near(b);
-    const auto by_coords = [&](std::int32_t a, std::int32_t c) {  // near's order
-        const auto &p = band.block_coord(std::size_t(a)), &r = band.block_coord(std::size_t(c));
-        return std::tie(p[2], p[1], p[0]) < std::tie(r[2], r[1], r[0]);
-    };
     const bool home_near = home >= 0 && std::binary_search(near.begin(), near.end(), home, by_coords);
     if (home_near) scan(home);
     for (std::int32_t b2 : near)

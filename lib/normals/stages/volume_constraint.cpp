@@ -33,8 +33,8 @@ void volume_and_slope(const Band& band, float shift, double& volume, double& slo
         for (std::size_t i = base; i < base + kBlockVoxels; ++i) {
             if (!mask[i]) continue;
             const float f = phi[i] + shift;
-            sv += std::clamp(0.5f - f, 0.0f, 1.0f);
-            sa += std::abs(f) < 0.5f ? 1.0f : 0.0f;
+            sv += inside_share(f);
+            sa += on_slope(f) ? 1.0f : 0.0f;
         }
         v[k] = sv;
         a[k] = sa;

@@ -3,7 +3,9 @@
 /// Keeping the enclosed volume through a refit: a uniform shift of φ, the level-set counterpart
 /// of the centroid and volume restoration mesh filters apply after their vertex update.
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 
 #include "normals/stages/stage.h"
 
@@ -19,6 +21,12 @@ double active_volume(const Band& band);
 /// surface): a brick's share of the whole surface's (smooth_in_bricks).
 void window_volume(const Band& band, const std::array<int, 3>& lo, const std::array<int, 3>& hi, double& volume,
                    double& slope);
+
+/// A sample's share of the volume inside the surface (φ in voxels): 1 inside, 0 outside, linear over the half voxel
+/// either side of the surface: the piecewise-linear volume that active_volume sums and restore_volume restores.
+inline float inside_share(float phi) { return std::clamp(0.5f - phi, 0.0f, 1.0f); }
+/// Whether a sample's share changes with a uniform shift of φ (the volume's slope counts it).
+inline bool on_slope(float phi) { return std::abs(phi) < 0.5f; }
 
 /// Newton steps restore_volume takes (and smooth_in_bricks after it, over the whole surface).
 inline constexpr int kVolumeNewtonSteps = 2;
