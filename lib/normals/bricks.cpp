@@ -105,6 +105,7 @@ BrickRunner run_on_threads(int at_once) {
     return [at_once](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
                      const std::function<void(BrickOutcome &&)>& take) {
         BrickContext each = c;
+        each.progress = nullptr;  // the calling thread's
         const int threads =
             c.engine.threads > 0 ? c.engine.threads : int(std::max(1u, std::thread::hardware_concurrency()));
         each.engine.threads = std::max(1, threads / at_once);
@@ -157,6 +158,23 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
         return job;
     };
     int next = 0;
+    // Within a brick run here: the pass's share of the line moves on through the brick, and a stop asked for stops it.
+    class WithinBrick final : public Progress {
+    public:
+        WithinBrick(Progress* outer, double from, double width, const int& next)
+            : outer_(outer), from_(from), width_(width), next_(next) {}
+        void progress(double f) override {
+            outer_->progress(from_ + width_ * (double(next_) + std::clamp(f, 0.0, 1.0)));
+        }
+        bool should_stop() override { return outer_->should_stop(); }
+
+    private:
+        Progress* outer_;
+        double from_, width_;
+        const int& next_;
+    } within(progress, done_before, share / total, next);
+    BrickContext here = c;
+    here.progress = progress ? &within : nullptr;
     const auto take = [&](BrickOutcome&& o) {
         if (o.index != next)
             throw std::logic_error("smooth_in_bricks: brick " + std::to_string(o.index) + " came back in place of " +
@@ -214,7 +232,7 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
                 }
         detail::tick(progress, done_before + share * double(next) / total, "smooth_in_bricks");
     };
-    runner(c, total, make, take);
+    runner(here, total, make, take);
     if (next != total)
         throw std::logic_error("smooth_in_bricks: " + std::to_string(total - next) + " bricks did not come back");
     result.record.roughness = roughness_of_histogram(result.roughness);
@@ -253,7 +271,15 @@ BrickOutcome run_brick(const BrickContext& c, BrickJob job) {
     Volume sub;
     if (job.scan) {
         if (!c.mesh || !c.query) throw InvalidInput("run_brick: a brick to scan needs the mesh and its search");
-        sub = scan_convert_window(*c.mesh, *c.query, c.wn, c.grid, w, c.scan);
+        // the window's scan stops when asked; the line moves with the engine's steps alone (the scan's own 0 to 1
+        // would run it back)
+        struct StopOnly final : Progress {
+            Progress* outer;
+            explicit StopOnly(Progress* p) : outer(p) {}
+            bool should_stop() override { return outer->should_stop(); }
+        } stop_only(c.progress);
+        sub =
+            scan_convert_window(*c.mesh, *c.query, c.wn, c.grid, w, c.scan, nullptr, c.progress ? &stop_only : nullptr);
     } else {
         sub = std::move(job.input);
         const Grid g = window_grid(c.grid, w);
@@ -301,7 +327,7 @@ BrickOutcome run_brick(const BrickContext& c, BrickJob job) {
         }
         brick.fixed_zone = std::min(kFixedZone, halo / 4);
         t0 = Clock::now();
-        SmoothReport r = smooth_volume(sub, brick);
+        SmoothReport r = smooth_volume(sub, brick, c.progress);
         o.seconds_smooth = seconds_since(t0);
         // (a window whose surface lies beyond it, only its band's edge in the interior, has nothing to say)
         if (!r.iterations.empty()) {

@@ -179,6 +179,44 @@ TEST(Bricks, ACheckpointStopsAfterTheFirstPassAndThreadsChangeNothing) {
     EXPECT_EQ(a.values, c.values);
 }
 
+// A brick of many minutes (2048 voxels a side in bricks of 512) still moves the progress line and stops when asked:
+// the bricks run here tick from within their window's scan and engine, and a stop asked for at the first tick inside
+// the first brick ends the run there (Cancelled). Before, the line moved and a stop was heard only between bricks,
+// and SIGTERM left such a run going for a quarter of an hour. The result does not depend on the ticks.
+TEST(Bricks, TheyTickAndStopFromWithinABrick) {
+    const Mesh m = noisy_scene(0.03);
+    const ScanConvertOptions scan = scan_at(32);
+    const SmoothOptions opt = bilateral(1, 1.5f);
+    const BrickOptions b{.brick_voxels = 16};
+    struct Recorder final : Progress {
+        std::vector<double> seen;
+        bool stop_inside = false;
+        bool stopped = false;
+        void progress(double f) override { seen.push_back(f); }
+        bool should_stop() override { return stopped = stop_inside && !seen.empty() && seen.back() > 0.0; }
+    };
+    const auto q = make_bvh_query(m);
+    const WindingNumber wn(m);
+    BrickReport rep;
+    Recorder r;
+    const Volume ticked = smooth_in_bricks(m, *q, &wn, scan, opt, b, &rep, nullptr, &r);
+    const double brick = 1.0 / rep.total();  // one brick's share of the line (one iteration)
+    ASSERT_GT(rep.total(), 4);
+    EXPECT_TRUE(std::is_sorted(r.seen.begin(), r.seen.end()));
+    const auto inside = std::count_if(r.seen.begin(), r.seen.end(), [&](double f) {
+        const double at = f / brick;
+        return f < 1.0 && std::abs(at - std::round(at)) > 1e-9;
+    });
+    EXPECT_GT(inside, rep.bricks_run);  // within the bricks, not only between them
+    EXPECT_EQ(ticked.values, smooth_in_bricks(m, *q, &wn, scan, opt, b).values);
+
+    Recorder stop;
+    stop.stop_inside = true;
+    EXPECT_THROW(smooth_in_bricks(m, *q, &wn, scan, opt, b, nullptr, nullptr, &stop), Cancelled);
+    ASSERT_TRUE(stop.stopped);
+    EXPECT_LT(stop.seen.back(), brick);  // still in the first brick
+}
+
 // A runner that carries every brick as messages (as Python's Dask bricks do), building all the jobs of a pass before
 // running any, and running them last to first: the result is the one run here, bit for bit, and the context goes
 // once per run; so is a run of three bricks at once on threads. A runner that hands an outcome back out of order, or
