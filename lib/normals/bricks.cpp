@@ -2,6 +2,7 @@
 #include "normals/bricks.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -104,8 +105,15 @@ void run_here(const BrickContext& c, int count, const std::function<BrickJob(int
 BrickRunner run_on_threads(int at_once) {
     return [at_once](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
                      const std::function<void(BrickOutcome &&)>& take) {
+        // A stop asked on the calling thread (which alone may ask c.progress) reaches the bricks through a flag.
+        std::atomic<bool> stop{false};
+        struct FlagStop final : Progress {
+            const std::atomic<bool>* flag = nullptr;
+            bool should_stop() override { return flag->load(); }
+        } flag_stop;
+        flag_stop.flag = &stop;
         BrickContext each = c;
-        each.progress = nullptr;  // the calling thread's
+        each.progress = c.progress ? &flag_stop : nullptr;
         const int threads =
             c.engine.threads > 0 ? c.engine.threads : int(std::max(1u, std::thread::hardware_concurrency()));
         each.engine.threads = std::max(1, threads / at_once);
@@ -114,6 +122,12 @@ BrickRunner run_on_threads(int at_once) {
         for (int taken = 0; taken < count; ++taken) {
             while (made < count && made - taken < at_once)
                 running.push_back(std::async(std::launch::async, run_brick, std::cref(each), make(made++)));
+            while (c.progress && !stop &&
+                   running.front().wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+                if (c.progress->should_stop())
+                    stop = true;
+                else
+                    running.front().wait_for(std::chrono::milliseconds(50));
             BrickOutcome o = running.front().get();  // (a brick that threw: the others finish as running goes)
             running.pop_front();
             take(std::move(o));

@@ -179,10 +179,11 @@ TEST(Bricks, ACheckpointStopsAfterTheFirstPassAndThreadsChangeNothing) {
     EXPECT_EQ(a.values, c.values);
 }
 
-// A brick of many minutes (2048 voxels a side in bricks of 512) still moves the progress line and stops when asked:
-// the bricks run here tick from within their window's scan and engine, and a stop asked for at the first tick inside
-// the first brick ends the run there (Cancelled). Before, the line moved and a stop was heard only between bricks,
-// and SIGTERM left such a run going for a quarter of an hour. The result does not depend on the ticks.
+// A brick of many minutes (2048 voxels a side in large bricks) still moves the progress line and stops when asked:
+// the bricks run here tick from within their window's engine and stop from within its scan too, and a stop asked for
+// at the first tick inside the first brick ends the run there (Cancelled); bricks on threads stop through a flag the
+// calling thread sets. Before, the line moved and a stop was heard only between bricks, and SIGTERM left such a run
+// going for a quarter of an hour. The result does not depend on the ticks.
 TEST(Bricks, TheyTickAndStopFromWithinABrick) {
     const Mesh m = noisy_scene(0.03);
     const ScanConvertOptions scan = scan_at(32);
@@ -215,6 +216,17 @@ TEST(Bricks, TheyTickAndStopFromWithinABrick) {
     EXPECT_THROW(smooth_in_bricks(m, *q, &wn, scan, opt, b, nullptr, nullptr, &stop), Cancelled);
     ASSERT_TRUE(stop.stopped);
     EXPECT_LT(stop.seen.back(), brick);  // still in the first brick
+
+    // bricks on threads of their own: the stop reaches them from the calling thread before any comes back
+    struct AtOnce final : Progress {
+        int ticks = 0;
+        void progress(double) override { ++ticks; }
+        bool should_stop() override { return true; }
+    } at_once;
+    EXPECT_THROW(smooth_in_bricks(m, *q, &wn, scan, opt, BrickOptions{.brick_voxels = 16, .concurrent = 2}, nullptr,
+                                  nullptr, &at_once),
+                 Cancelled);
+    EXPECT_EQ(at_once.ticks, 0);
 }
 
 // A runner that carries every brick as messages (as Python's Dask bricks do), building all the jobs of a pass before
