@@ -366,9 +366,13 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
             return plan;
         }
     }
+    // what no brick size lowers: the result's band, two copies held whole between iterations
+    const double held = e.mesh_bytes + 2 * band_bytes + kEngineRoundingBytes;
     throw OutOfMemory("this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
                       (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) +
-                      " voxels, more than the " + format_bytes(double(limit)) +
+                      " voxels (" + format_bytes(held) +
+                      " of it the mesh and the result's band, held whole whatever the bricks)" + ", more than the " +
+                      format_bytes(double(limit)) +
                       (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
                       "; lower --resolution or raise --max-memory");
 }

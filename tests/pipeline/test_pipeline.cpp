@@ -335,6 +335,7 @@ TEST(Pipeline, OverTheMemoryLimitTheEngineRunsInBricksAndGivesTheWholeRunsSurfac
     b.max_memory_bytes = 1 << 16;
     const std::string msg = message_of<OutOfMemory>([&] { (void)smooth_mesh(m, b); });
     EXPECT_NE(msg.find("even in bricks"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("held whole whatever the bricks"), std::string::npos) << msg;
 }
 
 // A runaway refit is caught over the whole surface: fandisk_n0.3 at 128 has a super step that doubles D (the whole
