@@ -468,19 +468,16 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     // windows then decide apart: a few tenths of a voxel from the whole run), with a warning.
     const bool checked_refit = opt.refit_super_steps > 0 && opt.mode != SmoothMode::MeanCurvature &&
                                (is_neighbourhood_filter(opt.mode) || opt.mode == SmoothMode::TotalVariation);
-    // The scan, here: held for the first pass only (which may run again), within the two copies of the band the plan
-    // counts (the scan's band is narrower than the engine's). Bricks sent elsewhere scan their own windows where they
-    // run (the sender builds no winding number; the scan is spread with the bricks), the same bit for bit.
-    Volume scanned;
-    if (!rep.elsewhere) scanned = scan_in_bricks(context, brick_blocks, rep, progress);
+    // held for the first pass only (which may run again), within the two copies of the band the plan counts (the
+    // scan's band is narrower than the engine's)
+    Volume scanned = scan_in_bricks(context, brick_blocks, rep, progress);
     for (int it = 0; it < iterations; ++it) {
         next.reset(grid, engine::kHalfWidth);
         const double share = 1.0 / iterations;
         BrickRefit refit;
         const auto pass = [&] {
-            const Volume* from = it > 0 ? &cur : rep.elsewhere ? nullptr : &scanned;
-            return run_pass(context, run, brick_blocks, halo_blocks, from, next, rep, progress, double(it) * share,
-                            share, it == 0 || raw, false, refit);
+            return run_pass(context, run, brick_blocks, halo_blocks, it == 0 ? &scanned : &cur, next, rep, progress,
+                            double(it) * share, share, it == 0 || raw, false, refit);
         };
         // a brick that keeps every super step can keep one that runs away until its φ is no longer finite (a
         // NumericalError): its D is then no decision's, as where it cannot be summed

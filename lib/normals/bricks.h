@@ -88,8 +88,8 @@ struct BrickJob {
     std::array<int, 3> lo{0, 0, 0};  ///< the interior, blocks of the grid
     std::array<int, 3> hi{0, 0, 0};
     BlockWindow window;              ///< the interior and its halo, blocks of the grid
-    bool scan = false;               ///< the window is scan-converted where it runs (the first pass of bricks sent
-                                     ///< elsewhere; here the first pass's windows are cut from the scan made once)
+    bool scan = false;               ///< the window is scan-converted; else `input` (smooth_in_bricks cuts every
+                                     ///< window, the first pass's from the scan it makes once)
     bool reinitialise_only = false;  ///< the window is only reinitialised (reinitialise_volume), as a run ends
     bool reinitialise_input = true;  ///< SmoothOptions::reinitialise_input for the engine's run
     Volume input;                    ///< the window of the last iteration's result (window_grid), unless scan
@@ -136,8 +136,8 @@ void brick_context_from_message(std::string_view message, BrickContext& context,
 /// scan_convert(m, q, scan) followed by smooth_volume(·, opt), brick by brick. The grid (scan_grid) is cut into
 /// bricks of bricks.brick_voxels (whole blocks, on multiples of the filters' sample stride); the run goes one main
 /// iteration at a time over all the bricks, each brick's window (its interior and halo) cut from the scan (made once,
-/// each interior scanned alone by scan_convert_window: bit for bit the whole scan; bricks sent elsewhere scan their
-/// window where they run) or from the last iteration's result, and its interior copied into the next one. Between iterations the run does what the one run does, in the same order, on the
+/// each interior scanned alone by scan_convert_window: bit for bit the whole scan) or from the last iteration's
+/// result, and its interior copied into the next one. Between iterations the run does what the one run does, in the same order, on the
 /// whole surface: the volume constraint's shift (preserve_volume: the bricks' interiors' volume changes and slopes
 /// summed, SmoothOptions::defer_volume_shift), the filters' automatic stop (opt.iterations = 0: the roughness of
 /// the iteration over the bricks' interiors' samples together, SmoothIteration::roughness_histogram), the checkpoint, and then the
