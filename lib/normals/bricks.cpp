@@ -254,43 +254,6 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
     return result;
 }
 
-/// The scan once, brick by brick: each interior scanned alone (scan_convert_window: bit for bit the whole scan
-/// there) into one volume over the grid, from which the first pass cuts its windows as the later passes cut theirs
-/// from the last result. Each window scanning its own halo scanned the surface about (b + 2h)² / b² times over:
-/// 14 times in bricks of 64 with a halo of 88 voxels, where the windows' scans took 152 of 605 s at 512.
-Volume scan_in_bricks(const BrickContext& c, int brick_blocks, BrickReport& rep, Progress* progress) {
-    const auto t0 = Clock::now();
-    Volume out(c.grid, c.scan.half_width);
-    std::array<int, 3> n{};
-    for (int a = 0; a < 3; ++a) n[a] = (out.block_dims[a] + brick_blocks - 1) / brick_blocks;
-    const int total = n[0] * n[1] * n[2];
-    detail::begin(progress, "voxelize");
-    for (int index = 0; index < total; ++index) {
-        const std::array<int, 3> b{index % n[0], index / n[0] % n[1], index / (n[0] * n[1])};
-        BlockWindow w;
-        for (int a = 0; a < 3; ++a) {
-            w.lo[a] = b[a] * brick_blocks;
-            w.hi[a] = std::min(w.lo[a] + brick_blocks, out.block_dims[a]);
-        }
-        const Volume part = scan_convert_window(*c.mesh, *c.query, c.wn, c.grid, w, c.scan);
-        out.background = part.background;
-        for (int k = w.lo[2]; k < w.hi[2]; ++k)
-            for (int j = w.lo[1]; j < w.hi[1]; ++j)
-                for (int i = w.lo[0]; i < w.hi[0]; ++i) {
-                    const std::int32_t slot = part.block_table[part.table_index(i - w.lo[0], j - w.lo[1], k - w.lo[2])];
-                    if (slot < 0) {
-                        out.block_table[out.table_index(i, j, k)] = slot;
-                        continue;
-                    }
-                    std::copy_n(part.block_values(slot), kBlockVoxels, out.block_values(out.allocate_block(i, j, k)));
-                }
-        detail::tick(progress, double(index + 1) / total, "smooth_in_bricks");
-    }
-    rep.seconds_scan += seconds_since(t0);
-    detail::begin(progress, "bricks");
-    return out;
-}
-
 /// The shift (voxels; φ ← φ + shift) that gives the volume back, with the whole run's Newton steps (restore_volume):
 /// the first from the volume the bricks' interiors gained and its slope, the others from the change a shift makes
 /// on the samples within half a voxel of the surface, all of which an engine's active band holds. With the first step
@@ -459,6 +422,7 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         cur = std::move(next);
         raw = false;
     };
+    detail::begin(progress, "bricks");
     // The refit's checks. Each brick keeps every super step (its D is its window's, which its border alone can raise),
     // and the whole surface's D, the bricks' interiors' summed, says what the whole run would have decided
     // (decide_super_steps). Where it would have undone a super step (one that ran away, a patient stop, a last step
@@ -468,15 +432,12 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     // windows then decide apart: a few tenths of a voxel from the whole run), with a warning.
     const bool checked_refit = opt.refit_super_steps > 0 && opt.mode != SmoothMode::MeanCurvature &&
                                (is_neighbourhood_filter(opt.mode) || opt.mode == SmoothMode::TotalVariation);
-    // held for the first pass only (which may run again), within the two copies of the band the plan counts (the
-    // scan's band is narrower than the engine's)
-    Volume scanned = scan_in_bricks(context, brick_blocks, rep, progress);
     for (int it = 0; it < iterations; ++it) {
         next.reset(grid, engine::kHalfWidth);
         const double share = 1.0 / iterations;
         BrickRefit refit;
         const auto pass = [&] {
-            return run_pass(context, run, brick_blocks, halo_blocks, it == 0 ? &scanned : &cur, next, rep, progress,
+            return run_pass(context, run, brick_blocks, halo_blocks, it == 0 ? nullptr : &cur, next, rep, progress,
                             double(it) * share, share, it == 0 || raw, false, refit);
         };
         // a brick that keeps every super step can keep one that runs away until its φ is no longer finite (a
@@ -522,7 +483,6 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         }
         ++rep.passes;
         add_new(sr.warnings, p.warnings);
-        if (it == 0) scanned = Volume();
         cur = std::move(next);
         if (!p.any) {  // no surface anywhere: the scan's volume, as smooth_volume returns one without a surface
             sr.warnings.push_back("the volume holds no surface (no sign change); returned unchanged");

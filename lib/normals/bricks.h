@@ -47,7 +47,7 @@ struct BrickReport {
     int bricks_run = 0;  ///< bricks whose engine ran (their interior near a surface), summed over the iterations
     int passes = 0;      ///< main iterations run over the bricks
     std::size_t largest_window_blocks = 0;  ///< the most allocated blocks one brick's window held in the engine
-    double seconds_scan = 0;                ///< wall seconds of the scan (brick by brick) and of cutting the windows
+    double seconds_scan = 0;                ///< wall seconds of the windows' scan conversions
     double seconds_smooth = 0;              ///< wall seconds of the engine over the bricks (reinitialisation too)
                                             ///< (summed over the bricks, where ever they ran)
     bool elsewhere = false;                 ///< the bricks ran where a BrickRunner sent them
@@ -88,8 +88,7 @@ struct BrickJob {
     std::array<int, 3> lo{0, 0, 0};  ///< the interior, blocks of the grid
     std::array<int, 3> hi{0, 0, 0};
     BlockWindow window;              ///< the interior and its halo, blocks of the grid
-    bool scan = false;               ///< the window is scan-converted; else `input` (smooth_in_bricks cuts every
-                                     ///< window, the first pass's from the scan it makes once)
+    bool scan = false;               ///< the window is scan-converted (the first iteration); else `input`
     bool reinitialise_only = false;  ///< the window is only reinitialised (reinitialise_volume), as a run ends
     bool reinitialise_input = true;  ///< SmoothOptions::reinitialise_input for the engine's run
     Volume input;                    ///< the window of the last iteration's result (window_grid), unless scan
@@ -135,9 +134,9 @@ void brick_context_from_message(std::string_view message, BrickContext& context,
 
 /// scan_convert(m, q, scan) followed by smooth_volume(·, opt), brick by brick. The grid (scan_grid) is cut into
 /// bricks of bricks.brick_voxels (whole blocks, on multiples of the filters' sample stride); the run goes one main
-/// iteration at a time over all the bricks, each brick's window (its interior and halo) cut from the scan (made once,
-/// each interior scanned alone by scan_convert_window: bit for bit the whole scan) or from the last iteration's
-/// result, and its interior copied into the next one. Between iterations the run does what the one run does, in the same order, on the
+/// iteration at a time over all the bricks, each brick's window (its interior and halo) taken from the scan
+/// (scan_convert_window, bit for bit the whole scan there) or from the last iteration's result, and its interior
+/// copied into the next one. Between iterations the run does what the one run does, in the same order, on the
 /// whole surface: the volume constraint's shift (preserve_volume: the bricks' interiors' volume changes and slopes
 /// summed, SmoothOptions::defer_volume_shift), the filters' automatic stop (opt.iterations = 0: the roughness of
 /// the iteration over the bricks' interiors' samples together, SmoothIteration::roughness_histogram), the checkpoint, and then the

@@ -10,7 +10,6 @@
 #include <functional>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 #include <vector>
 
 #include "../sdf/sdf_test_meshes.h"
@@ -190,15 +189,11 @@ TEST(Bricks, TheyTickAndStopFromWithinABrick) {
     const ScanConvertOptions scan = scan_at(32);
     const SmoothOptions opt = bilateral(1, 1.5f);
     const BrickOptions b{.brick_voxels = 16};
-    struct Recorder final : Progress {  // the "bricks" stage's (the scan, brick by brick, comes before it)
+    struct Recorder final : Progress {
         std::vector<double> seen;
-        bool in_bricks = false;
         bool stop_inside = false;
         bool stopped = false;
-        void begin(std::string_view stage) override { in_bricks = stage == "bricks"; }
-        void progress(double f) override {
-            if (in_bricks) seen.push_back(f);
-        }
+        void progress(double f) override { seen.push_back(f); }
         bool should_stop() override { return stopped = stop_inside && !seen.empty() && seen.back() > 0.0; }
     };
     const auto q = make_bvh_query(m);
@@ -224,11 +219,9 @@ TEST(Bricks, TheyTickAndStopFromWithinABrick) {
 
     // bricks on threads of their own: the stop reaches them from the calling thread before any comes back
     struct AtOnce final : Progress {
-        bool in_bricks = false;
         int ticks = 0;
-        void begin(std::string_view stage) override { in_bricks = stage == "bricks"; }
-        void progress(double) override { ticks += in_bricks; }
-        bool should_stop() override { return in_bricks; }
+        void progress(double) override { ++ticks; }
+        bool should_stop() override { return true; }
     } at_once;
     EXPECT_THROW(smooth_in_bricks(m, *q, &wn, scan, opt, BrickOptions{.brick_voxels = 16, .concurrent = 2}, nullptr,
                                   nullptr, &at_once),
