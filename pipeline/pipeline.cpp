@@ -367,7 +367,7 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
         }
     }
     // what no brick size lowers: the result's band, two copies held whole between iterations
-    const double held = e.mesh_bytes + 2 * band_bytes + kEngineRoundingBytes;
+    const double held = e.mesh_bytes + 2 * band_bytes;
     throw OutOfMemory("this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
                       (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) +
                       " voxels (" + format_bytes(held) +

@@ -119,18 +119,24 @@ BrickRunner run_on_threads(int at_once) {
         each.engine.threads = std::max(1, threads / at_once);
         std::deque<std::future<BrickOutcome>> running;
         int made = 0;
-        for (int taken = 0; taken < count; ++taken) {
-            while (made < count && made - taken < at_once)
-                running.push_back(std::async(std::launch::async, run_brick, std::cref(each), make(made++)));
-            while (c.progress && !stop &&
-                   running.front().wait_for(std::chrono::seconds(0)) != std::future_status::ready)
-                if (c.progress->should_stop())
-                    stop = true;
-                else
-                    running.front().wait_for(std::chrono::milliseconds(50));
-            BrickOutcome o = running.front().get();  // (a brick that threw: the others finish as running goes)
-            running.pop_front();
-            take(std::move(o));
+        try {
+            for (int taken = 0; taken < count; ++taken) {
+                while (made < count && made - taken < at_once)
+                    running.push_back(std::async(std::launch::async, run_brick, std::cref(each), make(made++)));
+                // asked before the brick comes back, whether or not it is done: a stop takes no more bricks
+                for (;;) {
+                    if (c.progress && c.progress->should_stop()) throw Cancelled("smooth_in_bricks: cancelled");
+                    if (!c.progress ||
+                        running.front().wait_for(std::chrono::milliseconds(50)) == std::future_status::ready)
+                        break;
+                }
+                BrickOutcome o = running.front().get();
+                running.pop_front();
+                take(std::move(o));
+            }
+        } catch (...) {
+            stop = true;  // the bricks still running stop at their next step; running's futures wait for them
+            throw;
         }
     };
 }
@@ -409,7 +415,14 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     context.engine = one;
     if (bricks.concurrent < 1)
         throw InvalidInput("smooth_in_bricks: concurrent must be >= 1, got " + std::to_string(bricks.concurrent));
-    const BrickRunner& run = runner && *runner       ? *runner
+    // a runner of the caller's gets no progress in its context: it may run bricks on threads of its own
+    const BrickRunner elsewhere = [runner](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+                                           const std::function<void(BrickOutcome &&)>& take) {
+        BrickContext without = c;
+        without.progress = nullptr;
+        (*runner)(without, count, make, take);
+    };
+    const BrickRunner& run = runner && *runner       ? elsewhere
                              : bricks.concurrent > 1 ? run_on_threads(bricks.concurrent)
                                                      : BrickRunner(run_here);
     rep.elsewhere = runner && *runner;

@@ -67,10 +67,11 @@ struct BrickContext {
     Grid grid;                          ///< scan_grid(*mesh, scan)
     ScanConvertOptions scan;
     SmoothOptions engine;  ///< one main iteration's options, as every brick runs them (its window's fields aside)
-    /// Ticks and cancellation within a brick (its window's scan and engine), on the thread that runs the pass only:
-    /// smooth_in_bricks sets it for the bricks it runs one after the other here, so that a brick of many minutes
-    /// still moves the progress line and stops when asked; null for bricks on other threads or machines. Never carried
-    /// in a message.
+    /// Ticks and cancellation within a brick (its window's scan: the stop; its engine: the steps), on the thread that
+    /// runs the pass only: smooth_in_bricks sets it for the bricks it runs one after the other here, so that a brick
+    /// of many minutes still moves the progress line and stops when asked. Bricks on threads of their own
+    /// (BrickOptions::concurrent) read a stop the calling thread sets; a runner of the caller's gets null. Never
+    /// carried in a message.
     Progress* progress = nullptr;
 };
 

@@ -182,8 +182,8 @@ TEST(Bricks, ACheckpointStopsAfterTheFirstPassAndThreadsChangeNothing) {
 // A brick of many minutes (2048 voxels a side in large bricks) still moves the progress line and stops when asked:
 // the bricks run here tick from within their window's engine and stop from within its scan too, and a stop asked for
 // at the first tick inside the first brick ends the run there (Cancelled); bricks on threads stop through a flag the
-// calling thread sets. Before, the line moved and a stop was heard only between bricks, and SIGTERM left such a run
-// going for a quarter of an hour. The result does not depend on the ticks.
+// calling thread sets (a runner of the caller's gets none). Before, the line moved and a stop was heard only between
+// bricks, and SIGTERM left such a run going for a quarter of an hour. The result does not depend on the ticks.
 TEST(Bricks, TheyTickAndStopFromWithinABrick) {
     const Mesh m = noisy_scene(0.03);
     const ScanConvertOptions scan = scan_at(32);
@@ -227,6 +227,18 @@ TEST(Bricks, TheyTickAndStopFromWithinABrick) {
                                   nullptr, &at_once),
                  Cancelled);
     EXPECT_EQ(at_once.ticks, 0);
+
+    // a runner of the caller's may run bricks on threads of its own: its context carries no progress
+    bool carried = false;
+    const BrickRunner mine = [&](const BrickContext& c, int count, const std::function<BrickJob(int)>& make,
+                                 const std::function<void(BrickOutcome &&)>& take) {
+        carried |= c.progress != nullptr;
+        for (int i = 0; i < count; ++i) take(run_brick(c, make(i)));
+    };
+    Recorder quiet;
+    EXPECT_EQ(smooth_in_bricks(m, *q, &wn, scan, opt, b, nullptr, nullptr, &quiet, nullptr, &mine).values,
+              ticked.values);
+    EXPECT_FALSE(carried);
 }
 
 // A runner that carries every brick as messages (as Python's Dask bricks do), building all the jobs of a pass before
