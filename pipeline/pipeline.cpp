@@ -335,6 +335,8 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
     // of the engine's samples, and the block table).
     const double engine_arrays = e.engine_blocks * 512 * kEngineBytesPerSample;
     const double band_bytes = e.engine_blocks * 512 * 4 + e.grid_samples / 512 * 4;
+    // what no brick size lowers: the mesh and the result's band, two copies held whole between iterations
+    const double held = e.mesh_bytes + 2 * band_bytes;
     // voxels: the cells the input's area is binned into, a block where the grid is at most 2048 voxels long (the windows
     // are whole blocks), at most 256 cells along the longest axis beyond
     const int kCell = std::max(kBlockDim, (std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) + 255) / 256);
@@ -351,7 +353,7 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
                                                  {i0 + brick_cells + halo_cells + 1, j0 + brick_cells + halo_cells + 1,
                                                   k0 + brick_cells + halo_cells + 1}));
         const double share = area.total > 0 ? worst / area.total : 1.0;
-        return e.mesh_bytes + 2 * band_bytes + kEngineRoundingBytes + share * engine_arrays;
+        return held + kEngineRoundingBytes + share * engine_arrays;
     };
     double smallest = 0;
     int tried = 0;
@@ -366,15 +368,12 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
             return plan;
         }
     }
-    // what no brick size lowers: the result's band, two copies held whole between iterations
-    const double held = e.mesh_bytes + 2 * band_bytes;
-    throw OutOfMemory("this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
-                      (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) +
-                      " voxels (" + format_bytes(held) +
-                      " of it the mesh and the result's band, held whole whatever the bricks)" + ", more than the " +
-                      format_bytes(double(limit)) +
-                      (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
-                      "; lower --resolution or raise --max-memory");
+    throw OutOfMemory(
+        "this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
+        (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) + " voxels (" +
+        format_bytes(held) + " of it the mesh and the result's band, held whole whatever the bricks), more than the " +
+        format_bytes(double(limit)) + (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
+        "; lower --resolution or raise --max-memory");
 }
 
 Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, PipelineReport* report, Progress* progress) {
