@@ -39,7 +39,7 @@ using namespace normalflow;
 
 namespace {
 
-using SmoothFn = SmoothReport (*)(Volume&, const SmoothOptions&, Progress*);
+using SmoothFn = decltype(&smooth_volume);  // the signature of this tree's smooth_volume
 
 SmoothFn load(const char* path) {
     void* h = dlopen(path, RTLD_NOW | RTLD_LOCAL);
@@ -47,10 +47,13 @@ SmoothFn load(const char* path) {
         std::fprintf(stderr, "nf_ab_engine: %s: %s\n", path, dlerror());
         std::exit(1);
     }
-    // normalflow::smooth_volume(Volume&, SmoothOptions const&, Progress*)
-    void* f = dlsym(h, "_ZN10normalflow13smooth_volumeERNS_6VolumeERKNS_13SmoothOptionsEPNS_8ProgressE");
+    // normalflow::smooth_volume(Volume&, SmoothOptions const&, Progress*, NormalMap*, SmoothCheckpoint const*):
+    // a library built before that signature (the normal map and the checkpoint came in December) has none.
+    void* f = dlsym(h,
+                    "_ZN10normalflow13smooth_volumeERNS_6VolumeERKNS_13SmoothOptionsEPNS_8ProgressEPSt5arrayIS0_Lm3EEP"
+                    "KSt8functionIFbRKS0_EE");
     if (!f) {
-        std::fprintf(stderr, "nf_ab_engine: %s: no normalflow::smooth_volume\n", path);
+        std::fprintf(stderr, "nf_ab_engine: %s: no normalflow::smooth_volume of this signature\n", path);
         std::exit(1);
     }
     return reinterpret_cast<SmoothFn>(f);
@@ -120,7 +123,7 @@ int main(int argc, char** argv) {
             for (int e = 0; e < 2; ++e) {
                 const int w = (r % 2) ? 1 - e : e;  // A B, B A, A B, ...
                 Volume v = input;
-                const SmoothReport rep = fn[w](v, o, nullptr);
+                const SmoothReport rep = fn[w](v, o, nullptr, nullptr, nullptr);
                 double total = 0;
                 for (const SmoothIteration& it : rep.iterations) total += it.seconds;
                 normals[w].push_back(rep.seconds_normals / iterations);
