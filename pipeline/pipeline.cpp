@@ -1,7 +1,10 @@
 #include "pipeline/pipeline.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -253,49 +256,114 @@ Volume scan_and_smooth_in_bricks(const ScanInput& in, const Mesh& input, Pipelin
     return v;
 }
 
-/// The area of m's triangles binned by the cell of `cell` voxels of grid g that holds each one's centroid, as a
-/// summed-volume table: the area of any box of cells in 8 lookups.
-struct AreaGrid {
-    std::array<int, 3> dims{1, 1, 1};  // cells
-    std::vector<double> sum;           // (dims + 1)³: sum[i][j][k] = area of the cells below (i, j, k)
+/// The 8³ blocks a run of the engine allocates around m's surface on grid g, as the engine's band does: the blocks the
+/// surface passes within a voxel of (|φ| < 1) and their 26 neighbours. Each triangle is cut into pieces no longer than
+/// half a block, and each piece marks the blocks that its bounding box, grown by a voxel, overlaps: a superset of the
+/// blocks the surface crosses. Counted per cell of `cell` blocks along each axis (1 where the grid is at most 2048
+/// voxels long) as a summed-volume table: the blocks of any box of cells in 8 lookups.
+struct BlockCounts {
+    std::array<int, 3> blocks{0, 0, 0};  // the grid's blocks along x, y, z
+    int cell = 1;                        // blocks per cell side
+    std::array<int, 3> dims{1, 1, 1};    // cells
+    std::vector<std::uint32_t> sum;      // (dims + 1)³: sum[i][j][k] = the blocks of the cells below (i, j, k)
     double total = 0;
     double at(int i, int j, int k) const {
         return sum[(std::size_t(k) * std::size_t(dims[1] + 1) + std::size_t(j)) * std::size_t(dims[0] + 1) +
                    std::size_t(i)];
     }
-    /// The area of the cells lo <= (i, j, k) < hi (clipped to the grid).
+    /// The blocks of the cells that hold any block lo <= b < hi (clipped to the grid).
     double box(std::array<int, 3> lo, std::array<int, 3> hi) const {
         for (int d = 0; d < 3; ++d) {
-            lo[d] = std::clamp(lo[d], 0, dims[d]);
-            hi[d] = std::clamp(hi[d], lo[d], dims[d]);
+            lo[d] = std::clamp(lo[d], 0, blocks[d]) / cell;
+            hi[d] = std::clamp((std::clamp(hi[d], 0, blocks[d]) + cell - 1) / cell, lo[d], dims[d]);
         }
         return at(hi[0], hi[1], hi[2]) - at(lo[0], hi[1], hi[2]) - at(hi[0], lo[1], hi[2]) - at(hi[0], hi[1], lo[2]) +
                at(lo[0], lo[1], hi[2]) + at(lo[0], hi[1], lo[2]) + at(hi[0], lo[1], lo[2]) - at(lo[0], lo[1], lo[2]);
     }
 };
 
-AreaGrid bin_area(const Mesh& m, const Grid& g, int cell) {
-    AreaGrid a;
-    for (int d = 0; d < 3; ++d) a.dims[d] = std::max(1, (g.dims[d] + cell - 1) / cell);
-    const std::size_t nx = std::size_t(a.dims[0]) + 1, ny = std::size_t(a.dims[1]) + 1, nz = std::size_t(a.dims[2]) + 1;
-    a.sum.assign(nx * ny * nz, 0.0);
-    const auto idx = [&](std::size_t i, std::size_t j, std::size_t k) { return (k * ny + j) * nx + i; };
+BlockCounts count_blocks(const Mesh& m, const Grid& g) {
+    BlockCounts c;
+    for (int d = 0; d < 3; ++d) c.blocks[d] = std::max(1, (g.dims[d] + kBlockDim - 1) / kBlockDim);
+    const std::size_t bx = std::size_t(c.blocks[0]), by = std::size_t(c.blocks[1]), bz = std::size_t(c.blocks[2]);
+    // one bit per block, rows of 64-bit words along x
+    const std::size_t nw = (bx + 63) / 64;
+    std::vector<std::uint64_t> bits(nw * by * bz, 0), grown(bits.size(), 0);
+    const auto word = [&](std::size_t j, std::size_t k) { return (k * by + j) * nw; };
+    const auto mark = [&](const Vec3d& lo, const Vec3d& hi) {
+        int b0[3], b1[3];
+        for (int d = 0; d < 3; ++d) {
+            b0[d] = std::clamp(int(std::floor((lo[d] - 1.0) / kBlockDim)), 0, c.blocks[d] - 1);
+            b1[d] = std::clamp(int(std::floor((hi[d] + 1.0) / kBlockDim)), 0, c.blocks[d] - 1);
+        }
+        for (int k = b0[2]; k <= b1[2]; ++k)
+            for (int j = b0[1]; j <= b1[1]; ++j)
+                for (int i = b0[0]; i <= b1[0]; ++i)
+                    bits[word(std::size_t(j), std::size_t(k)) + std::size_t(i) / 64] |= std::uint64_t(1) << (i % 64);
+    };
+    constexpr double kPiece = kBlockDim / 2.0;  // voxels
     for (const Tri& t : m.triangles) {
-        const Vec3d p(m.positions[t[0]]), q(m.positions[t[1]]), w(m.positions[t[2]]);
-        const double area = 0.5 * norm(cross(q - p, w - p));
-        const Vec3d c = g.index((p + q + w) / 3.0);
-        std::size_t cidx[3];
-        for (int d = 0; d < 3; ++d) cidx[d] = std::size_t(std::clamp(int(std::floor(c[d] / cell)), 0, a.dims[d] - 1));
-        a.sum[idx(cidx[0] + 1, cidx[1] + 1, cidx[2] + 1)] += area;
-        a.total += area;
+        const Vec3d a = g.index(Vec3d(m.positions[t[0]])), b = g.index(Vec3d(m.positions[t[1]])),
+                    e = g.index(Vec3d(m.positions[t[2]]));
+        const double longest = std::max({norm(b - a), norm(e - b), norm(a - e)});
+        const int n = std::max(1, int(std::ceil(longest / kPiece)));
+        const Vec3d u = (b - a) / double(n), v = (e - a) / double(n);
+        const auto at = [&](int i, int j) { return a + u * double(i) + v * double(j); };
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; i + j < n; ++j) {
+                // the piece (i, j), (i + 1, j), (i, j + 1), and beside it the one (i + 1, j), (i, j + 1), (i + 1, j + 1)
+                const Vec3d p = at(i, j), q = at(i + 1, j), r = at(i, j + 1);
+                Vec3d lo = cwise_min(cwise_min(p, q), r), hi = cwise_max(cwise_max(p, q), r);
+                if (i + j + 1 < n) {
+                    const Vec3d s = at(i + 1, j + 1);
+                    lo = cwise_min(lo, s);
+                    hi = cwise_max(hi, s);
+                }
+                mark(lo, hi);
+            }
     }
+    // the 26 neighbours: grown by a block along x (bits, across words), then y, then z
+    const std::uint64_t last = bx % 64 == 0 ? ~std::uint64_t(0) : (std::uint64_t(1) << (bx % 64)) - 1;
+    for (std::size_t row = 0; row < by * bz; ++row) {
+        const std::uint64_t* w = bits.data() + row * nw;
+        std::uint64_t* o = grown.data() + row * nw;
+        for (std::size_t x = 0; x < nw; ++x) {
+            const std::uint64_t left = x > 0 ? w[x - 1] >> 63 : 0, right = x + 1 < nw ? w[x + 1] << 63 : 0;
+            o[x] = w[x] | (w[x] << 1) | left | (w[x] >> 1) | right;
+        }
+        o[nw - 1] &= last;
+    }
+    for (std::size_t k = 0; k < bz; ++k)
+        for (std::size_t j = 0; j < by; ++j)
+            for (std::size_t x = 0; x < nw; ++x)
+                bits[word(j, k) + x] = grown[word(j, k) + x] | (j > 0 ? grown[word(j - 1, k) + x] : 0) |
+                                       (j + 1 < by ? grown[word(j + 1, k) + x] : 0);
+    for (std::size_t k = 0; k < bz; ++k)
+        for (std::size_t j = 0; j < by; ++j)
+            for (std::size_t x = 0; x < nw; ++x)
+                grown[word(j, k) + x] = bits[word(j, k) + x] | (k > 0 ? bits[word(j, k - 1) + x] : 0) |
+                                        (k + 1 < bz ? bits[word(j, k + 1) + x] : 0);
+    // counted per cell, then summed
+    c.cell = std::max(1, (std::max({c.blocks[0], c.blocks[1], c.blocks[2]}) + 255) / 256);
+    for (int d = 0; d < 3; ++d) c.dims[d] = (c.blocks[d] + c.cell - 1) / c.cell;
+    const std::size_t nx = std::size_t(c.dims[0]) + 1, ny = std::size_t(c.dims[1]) + 1, nz = std::size_t(c.dims[2]) + 1;
+    c.sum.assign(nx * ny * nz, 0);
+    const auto idx = [&](std::size_t i, std::size_t j, std::size_t k) { return (k * ny + j) * nx + i; };
+    for (std::size_t k = 0; k < bz; ++k)
+        for (std::size_t j = 0; j < by; ++j)
+            for (std::size_t x = 0; x < nw; ++x)
+                for (std::uint64_t w = grown[word(j, k) + x]; w != 0; w &= w - 1) {
+                    const std::size_t i = x * 64 + std::size_t(std::countr_zero(w));
+                    ++c.sum[idx(i / std::size_t(c.cell) + 1, j / std::size_t(c.cell) + 1, k / std::size_t(c.cell) + 1)];
+                    c.total += 1;
+                }
     for (std::size_t k = 1; k < nz; ++k)
         for (std::size_t j = 1; j < ny; ++j)
             for (std::size_t i = 1; i < nx; ++i)
-                a.sum[idx(i, j, k)] += a.sum[idx(i - 1, j, k)] + a.sum[idx(i, j - 1, k)] + a.sum[idx(i, j, k - 1)] -
-                                       a.sum[idx(i - 1, j - 1, k)] - a.sum[idx(i - 1, j, k - 1)] -
-                                       a.sum[idx(i, j - 1, k - 1)] + a.sum[idx(i - 1, j - 1, k - 1)];
-    return a;
+                c.sum[idx(i, j, k)] += c.sum[idx(i - 1, j, k)] + c.sum[idx(i, j - 1, k)] + c.sum[idx(i, j, k - 1)] -
+                                       c.sum[idx(i - 1, j - 1, k)] - c.sum[idx(i - 1, j, k - 1)] -
+                                       c.sum[idx(i, j - 1, k - 1)] + c.sum[idx(i - 1, j - 1, k - 1)];
+    return c;
 }
 
 }  // namespace
@@ -331,29 +399,27 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
     ScanConvertOptions grid_options = s;
     grid_options.voxel_size = h;
     const Grid grid = scan_grid(m, grid_options);
-    // The whole run's engine arrays, of which a window holds its share; the result's band per copy (φ alone: one float
-    // of the engine's samples, and the block table).
-    const double engine_arrays = e.engine_blocks * 512 * kEngineBytesPerSample;
-    const double band_bytes = e.engine_blocks * 512 * 4 + e.grid_samples / 512 * 4;
-    // what no brick size lowers: the mesh and the result's band, two copies held whole between iterations
+    // the engine's options on this grid, for the windows' cut (the filters' sample stride)
+    const SmoothOptions so = engine_options(o, h, model_length_scale(m), 0.0);
+    const BlockCounts blocks = count_blocks(m, grid);
+    plan.band_blocks = blocks.total;
+    // The result's band per copy (φ alone: one float of each of the engine's samples, and the block table). What no
+    // brick size lowers: the mesh and two copies of it, held whole between iterations.
+    const double band_bytes = blocks.total * 512 * 4 + e.grid_samples / 512 * 4;
     const double held = e.mesh_bytes + 2 * band_bytes;
-    // voxels: the cells the input's area is binned into, a block where the grid is at most 2048 voxels long (the windows
-    // are whole blocks), at most 256 cells along the longest axis beyond
-    const int kCell = std::max(kBlockDim, (std::max({grid.dims[0], grid.dims[1], grid.dims[2]}) + 255) / 256);
-    const AreaGrid area = bin_area(m, grid, kCell);
     const auto estimate = [&](int brick) {
-        // the largest area one window holds (the cells it touches), in the estimate's surface blocks
-        const int halo_cells = (halo_voxels + kCell - 1) / kCell, brick_cells = (brick + kCell - 1) / kCell;
+        // the most blocks one window holds: its engine's arrays, and the scanned window it starts from (φ of at most
+        // as many blocks)
+        const BrickBlocks cut = brick_blocks(so, brick, halo_voxels);
         double worst = 0;
-        for (int k0 = 0; k0 < area.dims[2]; k0 += brick_cells)
-            for (int j0 = 0; j0 < area.dims[1]; j0 += brick_cells)
-                for (int i0 = 0; i0 < area.dims[0]; i0 += brick_cells)
-                    worst =
-                        std::max(worst, area.box({i0 - halo_cells, j0 - halo_cells, k0 - halo_cells},
-                                                 {i0 + brick_cells + halo_cells + 1, j0 + brick_cells + halo_cells + 1,
-                                                  k0 + brick_cells + halo_cells + 1}));
-        const double share = area.total > 0 ? worst / area.total : 1.0;
-        return held + kEngineRoundingBytes + share * engine_arrays;
+        for (int k0 = 0; k0 < blocks.blocks[2]; k0 += cut.brick)
+            for (int j0 = 0; j0 < blocks.blocks[1]; j0 += cut.brick)
+                for (int i0 = 0; i0 < blocks.blocks[0]; i0 += cut.brick)
+                    worst = std::max(worst, blocks.box({i0 - cut.halo, j0 - cut.halo, k0 - cut.halo},
+                                                       {i0 + cut.brick + cut.halo, j0 + cut.brick + cut.halo,
+                                                        k0 + cut.brick + cut.halo}));
+        plan.window_blocks = worst;
+        return held + kEngineRoundingBytes + worst * 512 * (kEngineBytesPerSample + 4);
     };
     double smallest = 0;
     int tried = 0;

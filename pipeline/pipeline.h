@@ -503,12 +503,16 @@ int auto_resolution(const Mesh& m, const PipelineOptions& options);
 /// volume at once) and the estimated peak. With brick_voxels = 0, none where the whole run's estimate (check_memory)
 /// fits the limit; otherwise the largest side of 512, 384, 256, 192, 128, 96 or 64 voxels whose estimate fits: the
 /// mesh and its search trees, two copies of the result's band (φ only: the last pass's, which the windows read, and
-/// this one's) and one brick's engine, sized by the largest area of the input that one window (brick and halo) holds.
+/// this one's) and one window's engine and scanned volume. The blocks are counted, not estimated from the area: those
+/// the input's surface passes within a voxel of and their 26 neighbours, as the engine allocates them, over the whole
+/// grid for the band and within each window (brick and halo, cut as smooth_in_bricks cuts them) for the engine.
 /// halo_voxels: the halo the engine needs (voxels).
 /// \throw OutOfMemory when no brick size fits (the message names the limit and the smallest estimate).
 struct BrickPlan {
     int brick_voxels = 0;
     double estimate_bytes = 0;
+    double band_blocks = 0;    ///< blocks of the result's band, counted (0 where the whole volume fits)
+    double window_blocks = 0;  ///< the most blocks one window's engine holds at the size chosen, counted (likewise)
 };
 BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& options, double voxel_size, int halo_voxels);
 

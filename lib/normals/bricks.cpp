@@ -373,6 +373,14 @@ int brick_halo_voxels(const SmoothOptions& opt, int iterations) {
     return int(std::ceil(reach * std::max(1, iterations) + engine::kHalfWidth));
 }
 
+BrickBlocks brick_blocks(const SmoothOptions& opt, int brick_voxels, int halo_voxels) {
+    // Windows start on multiples of the filters' sample stride, so that each thins its samples as the whole grid.
+    const int unit = std::lcm(kBlockDim, surface_sample_stride(opt)) / kBlockDim;  // in blocks
+    const int halo = halo_voxels > 0 ? halo_voxels : brick_halo_voxels(opt, 1);
+    return {round_up((brick_voxels + kBlockDim - 1) / kBlockDim, unit),
+            round_up((halo + kBlockDim - 1) / kBlockDim, unit)};
+}
+
 Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn,
                         const ScanConvertOptions& scan, const SmoothOptions& opt, const BrickOptions& bricks,
                         BrickReport* report, SmoothReport* smooth_report, Progress* progress,
@@ -384,11 +392,8 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         throw InvalidInput("smooth_in_bricks: halo_voxels must be >= 0, got " + std::to_string(bricks.halo_voxels));
     const Grid grid = scan_grid(m, scan);
     const int iterations = opt.iterations > 0 ? opt.iterations : default_iterations(opt.mode);
-    // Windows start on multiples of the filters' sample stride, so that each thins its samples as the whole grid.
-    const int unit = std::lcm(kBlockDim, surface_sample_stride(opt)) / kBlockDim;  // in blocks
-    const int halo = bricks.halo_voxels > 0 ? bricks.halo_voxels : brick_halo_voxels(opt, 1);
-    const int brick_blocks = round_up((bricks.brick_voxels + kBlockDim - 1) / kBlockDim, unit);
-    const int halo_blocks = round_up((halo + kBlockDim - 1) / kBlockDim, unit);
+    const BrickBlocks cut = normalflow::brick_blocks(opt, bricks.brick_voxels, bricks.halo_voxels);
+    const int brick_blocks = cut.brick, halo_blocks = cut.halo;
     BrickReport rep;
     rep.brick_voxels = brick_blocks * kBlockDim;
     rep.halo_voxels = halo_blocks * kBlockDim;

@@ -39,6 +39,17 @@ struct BrickOptions {
 /// way; the band is engine::kHalfWidth. opt's defaults must be resolved (length_scale in voxels, sigma_spatial > 0).
 int brick_halo_voxels(const SmoothOptions& opt, int iterations);
 
+/// The whole 8³ blocks of a brick's interior and of its halo as smooth_in_bricks cuts them: brick_voxels and the halo
+/// (halo_voxels, or brick_halo_voxels(opt, 1) where 0) each rounded up to whole blocks, then to a multiple of the
+/// filters' sample stride (surface_sample_stride), on which the windows start. Brick (i, j, k) covers the blocks
+/// [i·brick, (i + 1)·brick) along x (likewise y, z), its window those and halo more on each side, both clipped to the
+/// grid.
+struct BrickBlocks {
+    int brick = 0;  ///< the interior's side, blocks
+    int halo = 0;   ///< the halo on each side, blocks
+};
+BrickBlocks brick_blocks(const SmoothOptions& opt, int brick_voxels, int halo_voxels);
+
 /// What smooth_in_bricks did.
 struct BrickReport {
     int brick_voxels = 0;                ///< the interior's side, voxels (whole blocks)

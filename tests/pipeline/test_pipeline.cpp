@@ -270,6 +270,43 @@ TEST(Pipeline, TheMemoryEstimateCountsTheEnginesBlocks) {
     }
 }
 
+// The brick plan counts the blocks (issue 41): the result's band and the most blocks one window's engine holds, as
+// the engine allocates them around the input's surface (the blocks it passes within a voxel of and their 26
+// neighbours), cut as smooth_in_bricks cuts the windows. Each count covers what the runs allocate, and by little more:
+// the area-based estimate it replaced came out 1.18x over the whole band and 1.42x over the largest window on
+// fandisk_n0.3 at 512.
+TEST(Pipeline, TheBrickPlanCountsTheBlocksTheWindowsHold) {
+    Mesh torus = test::torus_mesh(1.0, 0.3, 96, 32);
+    for (std::size_t i = 0; i < torus.positions.size(); ++i)  // deterministic radial noise of ±1%
+        torus.positions[i] *= float(1.0 + 0.01 * std::sin(double(i) * 12.9898));
+    const std::pair<const char*, Mesh> shapes[] = {{"noisy torus", torus},
+                                                   {"box", test::box_mesh({-1, -0.6, -0.4}, {1, 0.6, 0.4})}};
+    for (const auto& [name, m] : shapes) {
+        PipelineOptions o;
+        o.scan.resolution = 96;
+        o.smooth.iterations = 1;
+        PipelineReport whole;
+        (void)smooth_mesh_to_volume(m, o, &whole);
+        ASSERT_FALSE(whole.smooth.iterations.empty()) << name;
+        const double allocated = double(whole.smooth.iterations[0].allocated_voxels) / 512;
+        PipelineOptions b = o;
+        b.brick_voxels = 24;
+        b.brick_halo_voxels = 16;
+        PipelineReport bricked;
+        (void)smooth_mesh_to_volume(m, b, &bricked);
+        ASSERT_TRUE(bricked.bricked) << name;
+        const double window = double(bricked.bricks.largest_window_blocks);
+        const BrickPlan plan = plan_bricks(m, b, whole.scan.grid.voxel_size, 16);
+        std::printf("%s: band %.0f blocks counted, %.0f allocated; window %.0f counted, %.0f allocated\n", name,
+                    plan.band_blocks, allocated, plan.window_blocks, window);
+        EXPECT_GE(plan.band_blocks, allocated) << name;
+        EXPECT_LE(plan.band_blocks, 1.3 * allocated) << name;
+        EXPECT_GE(plan.window_blocks, window) << name;
+        EXPECT_LE(plan.window_blocks, 1.3 * window) << name;
+        EXPECT_GE(plan.estimate_bytes, plan.window_blocks * 512 * kEngineBytesPerSample) << name;
+    }
+}
+
 TEST(Pipeline, MemoryLimitRefusesWithOutOfMemory) {
     PipelineOptions o = quick_options();
     o.scan.resolution = 2048;
