@@ -200,6 +200,7 @@ ScanInput prepare_scan(const Mesh& input, const PipelineOptions& options, Pipeli
         o.brick_voxels = plan.brick_voxels;
         o.brick_halo_voxels = halo;
         r.memory_estimate_bytes = plan.estimate_bytes;
+        r.estimated_window_blocks = plan.window_blocks;
     }
     r.distance = o.distance;
 #ifdef NORMALFLOW_HAS_CGAL

@@ -246,6 +246,7 @@ struct PipelineReport {
     DistanceQuery distance = DistanceQuery::EngineBvh;  ///< the query used
     ScanConvertOptions scan_options;                    ///< the scan conversion's options as run (band rule applied)
     double memory_estimate_bytes = 0;                   ///< estimated peak of the run (see check_memory)
+    double estimated_window_blocks = 0;  ///< bricked: the most blocks one window's engine was planned for (plan_bricks)
     ScanConvertReport scan;
     double length_scale = 0;         ///< world units: the model length unit the engine ran with (0: not smoothed)
     double noise = 0;                ///< world units: the input's noise (estimate_noise; 0: not estimated)

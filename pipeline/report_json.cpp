@@ -185,6 +185,7 @@ Json to_json(const PipelineReport& r) {
                             .set("bricks_run", b.bricks_run)
                             .set("iterations", b.passes)
                             .set("largest_window_blocks", b.largest_window_blocks)
+                            .set("estimated_window_blocks", r.estimated_window_blocks)
                             .set("seconds_scan", b.seconds_scan)
                             .set("seconds_smooth", b.seconds_smooth)
                             .set("refit_passes_redone", b.refit_passes_redone)

@@ -18,6 +18,12 @@ namespace normalflow {
 inline constexpr double kEngineBytesPerSample = 12 * 4 + 1;
 /// Arrays the engine maps in huge pages (the 12 floats and the mask), each rounded up to 2 MiB.
 inline constexpr double kEngineRoundingBytes = 13.0 * (2 << 20);
+/// What a run holds per input triangle besides the volume, at its peak: the mesh as read and as repaired, the closest
+/// triangle search's tree and the winding number's. Measured as the resident size of `smooth --resolution 16` less
+/// that of `normalflow --version` (the libraries): 13.1 MB on fandisk_n0.3 (12,946 triangles), 20.4 MB on fertility_n3
+/// (27,954), 44.6 MB on julius_n0.2 (71,912) and 50.7 MB on vaselion_n3 (77,452), 582 bytes per triangle beyond
+/// 5.6 MB (2026-12-07; the estimate counted 160 before, a quarter of it).
+inline constexpr double kMeshBytesPerTriangle = 600;
 
 /// What a run of the pipeline is expected to hold at its peak, in bytes.
 struct MemoryEstimate {
@@ -56,7 +62,7 @@ inline MemoryEstimate estimate_memory(const Mesh& m, double h, float half_width)
     e.engine_blocks = 3 * e.surface_blocks;
     const double band_layers = 1 + std::ceil((2 * half_width + 1) / 8.0);  // blocks across the band
     const double table_bytes = samples / 512 * 4;
-    e.mesh_bytes = double(m.positions.size()) * 12 + double(m.triangles.size()) * 160;
+    e.mesh_bytes = double(m.positions.size()) * 12 + double(m.triangles.size()) * kMeshBytesPerTriangle;
     e.scan_bytes = e.surface_blocks * band_layers * 512 * 4 + table_bytes + e.mesh_bytes;
     e.engine_bytes = e.engine_blocks * 512 * kEngineBytesPerSample + kEngineRoundingBytes + table_bytes;
     e.smooth_bytes = e.engine_bytes + e.scan_bytes;

@@ -297,6 +297,7 @@ TEST(Pipeline, TheBrickPlanCountsTheBlocksTheWindowsHold) {
         ASSERT_TRUE(bricked.bricked) << name;
         const double window = double(bricked.bricks.largest_window_blocks);
         const BrickPlan plan = plan_bricks(m, b, whole.scan.grid.voxel_size, 16);
+        EXPECT_EQ(bricked.estimated_window_blocks, plan.window_blocks) << name;  // the run's own plan, reported
         std::printf("%s: band %.0f blocks counted, %.0f allocated; window %.0f counted, %.0f allocated\n", name,
                     plan.band_blocks, allocated, plan.window_blocks, window);
         EXPECT_GE(plan.band_blocks, allocated) << name;
