@@ -16,6 +16,7 @@
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
+#include "core/union_find.h"
 #include "extract/surface_attributes.h"
 #include "fit/untangle.h"
 #include "metrics/noise.h"
@@ -192,11 +193,12 @@ ScanInput prepare_scan(const Mesh& input, const PipelineOptions& options, Pipeli
         o.brick_voxels = 0;
         r.memory_estimate_bytes = check_memory(mesh, o);
     } else if (!mesh.triangles.empty()) {
-        const double h =
-            o.scan.voxel_size > 0 ? o.scan.voxel_size : bounding_box(mesh).longest_side() / o.scan.resolution;
-        const SmoothOptions so = engine_options(o, h, model_length_scale(mesh), 0.0);
+        // the grid and the length scale that a run in bricks takes (scan_and_smooth_in_bricks), so that the plan cuts
+        // its windows; the noise taken as 0 gives the widest filter, and so the widest halo
+        const double h = scan_grid(mesh, r.scan_options).voxel_size;
+        const SmoothOptions so = engine_options(o, h, model_length_scale(input), 0.0);
         const int halo = o.brick_halo_voxels > 0 ? o.brick_halo_voxels : brick_halo_voxels(so, 1);
-        const BrickPlan plan = plan_bricks(mesh, o, h, halo);
+        const BrickPlan plan = plan_bricks(mesh, o, h, halo, &so);
         o.brick_voxels = plan.brick_voxels;
         o.brick_halo_voxels = halo;
         r.memory_estimate_bytes = plan.estimate_bytes;
@@ -258,10 +260,14 @@ Volume scan_and_smooth_in_bricks(const ScanInput& in, const Mesh& input, Pipelin
 }
 
 /// The 8³ blocks a run of the engine allocates around m's surface on grid g, as the engine's band does: the blocks the
-/// surface passes within a voxel of (|φ| < 1) and their 26 neighbours. Each triangle is cut into pieces no longer than
-/// half a block, and each piece marks the blocks that its bounding box, grown by a voxel, overlaps: a superset of the
-/// blocks the surface crosses. Counted per cell of `cell` blocks along each axis (1 where the grid is at most 2048
-/// voxels long) as a summed-volume table: the blocks of any box of cells in 8 lookups.
+/// surface passes within a voxel of (|φ| < 1) and their 26 neighbours. Each triangle is cut into pieces of at most 3
+/// voxels along its longest and its shortest edge (as many as its area and its perimeter need, a sliver's few), and
+/// each piece marks the blocks that its bounding box, grown by a voxel, overlaps: a superset of the blocks the surface
+/// crosses. The surface includes, on an open mesh, a cap over each run of boundary edges (a fan from the run's
+/// centroid), where the winding number's sign closes the input across its holes; in shell mode (shell_thickness T >
+/// 0) φ's zero lies T/2 off the triangles, so the boxes grow by T/2 more. Counted per cell of `cell` blocks along each
+/// axis (1 where the grid, its padding included, is at most 2048 voxels long) as a summed-volume table: the blocks of
+/// any box of cells in 8 lookups. Holds two bits per block of the grid while it counts (4.3 MB at 2048).
 struct BlockCounts {
     std::array<int, 3> blocks{0, 0, 0};  // the grid's blocks along x, y, z
     int cell = 1;                        // blocks per cell side
@@ -283,7 +289,46 @@ struct BlockCounts {
     }
 };
 
-BlockCounts count_blocks(const Mesh& m, const Grid& g) {
+/// The caps over m's holes: for each run of boundary edges (edges of one triangle; runs joined where they share a
+/// vertex), the triangles from the run's centroid to each of its edges, in grid indices.
+std::vector<std::array<Vec3d, 3>> hole_caps(const Mesh& m, const Grid& g) {
+    // the edges as (smaller vertex, larger vertex) keys, sorted: an edge of one triangle appears once
+    std::vector<std::uint64_t> edges;
+    edges.reserve(3 * m.triangles.size());
+    for (const Tri& t : m.triangles)
+        for (int c = 0; c < 3; ++c) {
+            const std::uint64_t u = t[c], v = t[(c + 1) % 3];
+            edges.push_back(std::min(u, v) << 32 | std::max(u, v));
+        }
+    std::sort(edges.begin(), edges.end());
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
+    for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i + 1;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        if (j == i + 1) boundary.emplace_back(std::uint32_t(edges[i] >> 32), std::uint32_t(edges[i]));
+        i = j;
+    }
+    edges = {};
+    std::vector<std::array<Vec3d, 3>> caps;
+    if (boundary.empty()) return caps;
+    detail::UnionFind<std::uint32_t> runs(m.positions.size());
+    for (const auto& [u, v] : boundary) runs.unite(u, v);
+    // by the run's root: the sum of its edges' ends, and their number
+    std::vector<Vec3d> sum(m.positions.size(), Vec3d(0, 0, 0));
+    std::vector<double> count(m.positions.size(), 0.0);
+    for (const auto& [u, v] : boundary) {
+        const std::uint32_t r = runs.find(u);
+        sum[r] += Vec3d(m.positions[u]) + Vec3d(m.positions[v]);
+        count[r] += 2;
+    }
+    for (const auto& [u, v] : boundary) {
+        const std::uint32_t r = runs.find(u);
+        caps.push_back({g.index(sum[r] / count[r]), g.index(Vec3d(m.positions[u])), g.index(Vec3d(m.positions[v]))});
+    }
+    return caps;
+}
+
+BlockCounts count_blocks(const Mesh& m, const Grid& g, double shell_thickness) {
     BlockCounts c;
     for (int d = 0; d < 3; ++d) c.blocks[d] = std::max(1, (g.dims[d] + kBlockDim - 1) / kBlockDim);
     const std::size_t bx = std::size_t(c.blocks[0]), by = std::size_t(c.blocks[1]), bz = std::size_t(c.blocks[2]);
@@ -291,38 +336,57 @@ BlockCounts count_blocks(const Mesh& m, const Grid& g) {
     const std::size_t nw = (bx + 63) / 64;
     std::vector<std::uint64_t> bits(nw * by * bz, 0), grown(bits.size(), 0);
     const auto word = [&](std::size_t j, std::size_t k) { return (k * by + j) * nw; };
+    const double reach = 1.0 + 0.5 * shell_thickness / g.voxel_size;  // voxels
     const auto mark = [&](const Vec3d& lo, const Vec3d& hi) {
         int b0[3], b1[3];
         for (int d = 0; d < 3; ++d) {
-            b0[d] = std::clamp(int(std::floor((lo[d] - 1.0) / kBlockDim)), 0, c.blocks[d] - 1);
-            b1[d] = std::clamp(int(std::floor((hi[d] + 1.0) / kBlockDim)), 0, c.blocks[d] - 1);
+            b0[d] = std::clamp(int(std::floor((lo[d] - reach) / kBlockDim)), 0, c.blocks[d] - 1);
+            b1[d] = std::clamp(int(std::floor((hi[d] + reach) / kBlockDim)), 0, c.blocks[d] - 1);
         }
         for (int k = b0[2]; k <= b1[2]; ++k)
             for (int j = b0[1]; j <= b1[1]; ++j)
                 for (int i = b0[0]; i <= b1[0]; ++i)
                     bits[word(std::size_t(j), std::size_t(k)) + std::size_t(i) / 64] |= std::uint64_t(1) << (i % 64);
     };
-    constexpr double kPiece = kBlockDim / 2.0;  // voxels
-    for (const Tri& t : m.triangles) {
-        const Vec3d a = g.index(Vec3d(m.positions[t[0]])), b = g.index(Vec3d(m.positions[t[1]])),
-                    e = g.index(Vec3d(m.positions[t[2]]));
-        const double longest = std::max({norm(b - a), norm(e - b), norm(a - e)});
-        const int n = std::max(1, int(std::ceil(longest / kPiece)));
-        const Vec3d u = (b - a) / double(n), v = (e - a) / double(n);
-        const auto at = [&](int i, int j) { return a + u * double(i) + v * double(j); };
-        for (int i = 0; i < n; ++i)
-            for (int j = 0; i + j < n; ++j) {
-                // the piece (i, j), (i + 1, j), (i, j + 1), and beside it the one (i + 1, j), (i, j + 1), (i + 1, j + 1)
-                const Vec3d p = at(i, j), q = at(i + 1, j), r = at(i, j + 1);
-                Vec3d lo = cwise_min(cwise_min(p, q), r), hi = cwise_max(cwise_max(p, q), r);
-                if (i + j + 1 < n) {
-                    const Vec3d s = at(i + 1, j + 1);
-                    lo = cwise_min(lo, s);
-                    hi = cwise_max(hi, s);
+    constexpr double kPiece = 3.0;  // voxels
+    // A triangle (in grid indices) in pieces: from the corner between its longest edge (e1) and its shortest (e2),
+    // cells of at most kPiece along each, each cut along its diagonal into two triangles; each of those that touch the
+    // triangle marks its box (the parts beyond the triangle lie within a cell of it).
+    const auto mark_triangle = [&](const Vec3d(&p)[3]) {
+        double len[3];
+        for (int e = 0; e < 3; ++e) len[e] = norm(p[(e + 1) % 3] - p[e]);  // edge e: p[e] to p[e + 1]
+        const int longest = int(std::max_element(len, len + 3) - len);
+        int shortest = (longest + 1) % 3;
+        if (len[(longest + 2) % 3] < len[shortest]) shortest = (longest + 2) % 3;
+        // their shared corner: edges e and e + 1 share p[e + 1]
+        const int o = (shortest == (longest + 1) % 3) ? (longest + 1) % 3 : longest;
+        const Vec3d& a = p[o];
+        const Vec3d e1 = (longest == o ? p[(o + 1) % 3] : p[(o + 2) % 3]) - a;
+        const Vec3d e2 = (shortest == o ? p[(o + 1) % 3] : p[(o + 2) % 3]) - a;
+        const int n1 = std::max(1, int(std::ceil(norm(e1) / kPiece))),
+                  n2 = std::max(1, int(std::ceil(norm(e2) / kPiece)));
+        const Vec3d u = e1 / double(n1), v = e2 / double(n2);
+        for (int j = 0; j < n2; ++j)
+            for (int i = 0; i < n1 && double(i) / n1 + double(j) / n2 < 1.0; ++i) {
+                const Vec3d q = a + u * double(i) + v * double(j), qu = q + u, qv = q + v;
+                mark(cwise_min(q, cwise_min(qu, qv)), cwise_max(q, cwise_max(qu, qv)));
+                // the far half touches the triangle where one of its near corners lies within it
+                if (std::min(double(i + 1) / n1 + double(j) / n2, double(i) / n1 + double(j + 1) / n2) <= 1.0) {
+                    const Vec3d quv = qu + v;
+                    mark(cwise_min(quv, cwise_min(qu, qv)), cwise_max(quv, cwise_max(qu, qv)));
                 }
-                mark(lo, hi);
             }
+    };
+    for (const Tri& t : m.triangles) {
+        const Vec3d p[3] = {g.index(Vec3d(m.positions[t[0]])), g.index(Vec3d(m.positions[t[1]])),
+                            g.index(Vec3d(m.positions[t[2]]))};
+        mark_triangle(p);
     }
+    if (shell_thickness == 0)
+        for (const auto& cap : hole_caps(m, g)) {
+            const Vec3d p[3] = {cap[0], cap[1], cap[2]};
+            mark_triangle(p);
+        }
     // the 26 neighbours: grown by a block along x (bits, across words), then y, then z
     const std::uint64_t last = bx % 64 == 0 ? ~std::uint64_t(0) : (std::uint64_t(1) << (bx % 64)) - 1;
     for (std::size_t row = 0; row < by * bz; ++row) {
@@ -386,7 +450,7 @@ SmoothOptions engine_options(const PipelineOptions& o, double voxel_size, double
     return so;
 }
 
-BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int halo_voxels) {
+BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int halo_voxels, const SmoothOptions* engine) {
     BrickPlan plan;
     const ScanConvertOptions s = effective_scan_options(o);
     const MemoryEstimate e = estimate_memory(m, h, s.half_width);
@@ -401,8 +465,8 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
     grid_options.voxel_size = h;
     const Grid grid = scan_grid(m, grid_options);
     // the engine's options on this grid, for the windows' cut (the filters' sample stride)
-    const SmoothOptions so = engine_options(o, h, model_length_scale(m), 0.0);
-    const BlockCounts blocks = count_blocks(m, grid);
+    const SmoothOptions so = engine ? *engine : engine_options(o, h, model_length_scale(m), 0.0);
+    const BlockCounts blocks = count_blocks(m, grid, s.shell_thickness);
     plan.band_blocks = blocks.total;
     // The result's band per copy (φ alone: one float of each of the engine's samples, and the block table). What no
     // brick size lowers: the mesh and two copies of it, held whole between iterations.

@@ -507,7 +507,8 @@ int auto_resolution(const Mesh& m, const PipelineOptions& options);
 /// this one's) and one window's engine and scanned volume. The blocks are counted, not estimated from the area: those
 /// the input's surface passes within a voxel of and their 26 neighbours, as the engine allocates them, over the whole
 /// grid for the band and within each window (brick and halo, cut as smooth_in_bricks cuts them) for the engine.
-/// halo_voxels: the halo the engine needs (voxels).
+/// halo_voxels: the halo the engine needs (voxels); engine: the options the bricks will run with, whose filters' sample
+/// stride cuts the windows (null: engine_options of options on this grid, with m's length scale).
 /// \throw OutOfMemory when no brick size fits (the message names the limit and the smallest estimate).
 struct BrickPlan {
     int brick_voxels = 0;
@@ -515,7 +516,8 @@ struct BrickPlan {
     double band_blocks = 0;    ///< blocks of the result's band, counted (0 where the whole volume fits)
     double window_blocks = 0;  ///< the most blocks one window's engine holds at the size chosen, counted (likewise)
 };
-BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& options, double voxel_size, int halo_voxels);
+BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& options, double voxel_size, int halo_voxels,
+                      const SmoothOptions* engine = nullptr);
 
 /// The engine's options of a run on a grid of voxel_size: options.smooth with its length scale in voxels
 /// (options.length_scale, or default_length_scale) and sigma_spatial's automatic value (auto_sigma_spatial of noise)
