@@ -292,23 +292,9 @@ struct BlockCounts {
 /// The caps over m's holes: for each run of boundary edges (edges of one triangle; runs joined where they share a
 /// vertex), the triangles from the run's centroid to each of its edges, in grid indices.
 std::vector<std::array<Vec3d, 3>> hole_caps(const Mesh& m, const Grid& g) {
-    // the edges as (smaller vertex, larger vertex) keys, sorted: an edge of one triangle appears once
-    std::vector<std::uint64_t> edges;
-    edges.reserve(3 * m.triangles.size());
-    for (const Tri& t : m.triangles)
-        for (int c = 0; c < 3; ++c) {
-            const std::uint64_t u = t[c], v = t[(c + 1) % 3];
-            edges.push_back(std::min(u, v) << 32 | std::max(u, v));
-        }
-    std::sort(edges.begin(), edges.end());
     std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
-    for (std::size_t i = 0; i < edges.size();) {
-        std::size_t j = i + 1;
-        while (j < edges.size() && edges[j] == edges[i]) ++j;
-        if (j == i + 1) boundary.emplace_back(std::uint32_t(edges[i] >> 32), std::uint32_t(edges[i]));
-        i = j;
-    }
-    edges = {};
+    for (const std::uint64_t e : single_face_edges(m.triangles))
+        boundary.emplace_back(std::uint32_t(e >> 32), std::uint32_t(e));
     std::vector<std::array<Vec3d, 3>> caps;
     if (boundary.empty()) return caps;
     detail::UnionFind<std::uint32_t> runs(m.positions.size());

@@ -79,6 +79,24 @@ void compute_vertex_normals(Mesh& m) {
     }
 }
 
+std::vector<std::uint64_t> single_face_edges(const std::vector<Tri>& tris) {
+    std::vector<std::uint64_t> e;
+    e.reserve(3 * tris.size());
+    for (const Tri& t : tris)
+        for (int k = 0; k < 3; ++k)
+            if (t[std::size_t(k)] != t[std::size_t((k + 1) % 3)])
+                e.push_back(edge_key(t[std::size_t(k)], t[std::size_t((k + 1) % 3)]));
+    std::sort(e.begin(), e.end());
+    std::vector<std::uint64_t> once;
+    for (std::size_t i = 0; i < e.size();) {
+        std::size_t j = i;
+        while (j < e.size() && e[j] == e[i]) ++j;
+        if (j - i == 1) once.push_back(e[i]);
+        i = j;
+    }
+    return once;
+}
+
 std::vector<std::uint32_t> face_components(const Mesh& m, const std::vector<char>* only, std::size_t* count) {
     const auto in = [&](std::size_t f) { return !only || (*only)[f] != 0; };
     detail::UnionFind<std::uint32_t> uf(m.positions.size());

@@ -112,6 +112,15 @@ void remove_unreferenced_vertices(Mesh& m);
 /// the written file still shades smoothly. Cost: one pass over the triangles, one over the vertices.
 void compute_vertex_normals(Mesh& m);
 
+/// The key of the undirected edge {a, b}: (smaller << 32) | larger.
+inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+    return a < b ? std::uint64_t(a) << 32 | b : std::uint64_t(b) << 32 | a;
+}
+
+/// Sorted keys (edge_key) of the edges of exactly one triangle of tris: a mesh's boundary, for triangles with welded
+/// indices (degenerate edges {a, a} skipped).
+std::vector<std::uint64_t> single_face_edges(const std::vector<Tri>& tris);
+
 /// Bounding box of all positions of m.
 inline Box3d bounding_box(const Mesh& m) {
     Box3d b;

@@ -16,29 +16,6 @@
 namespace normalflow {
 namespace {
 
-std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
-    return a < b ? std::uint64_t(a) << 32 | b : std::uint64_t(b) << 32 | a;
-}
-
-/// Sorted keys of the edges of exactly one face (triangles with welded indices; degenerate edges skipped).
-std::vector<std::uint64_t> single_face_edges(const std::vector<Tri>& tris) {
-    std::vector<std::uint64_t> e;
-    e.reserve(3 * tris.size());
-    for (const Tri& t : tris)
-        for (int k = 0; k < 3; ++k)
-            if (t[std::size_t(k)] != t[std::size_t((k + 1) % 3)])
-                e.push_back(edge_key(t[std::size_t(k)], t[std::size_t((k + 1) % 3)]));
-    std::sort(e.begin(), e.end());
-    std::vector<std::uint64_t> once;
-    for (std::size_t i = 0; i < e.size();) {
-        std::size_t j = i;
-        while (j < e.size() && e[j] == e[i]) ++j;
-        if (j - i == 1) once.push_back(e[i]);
-        i = j;
-    }
-    return once;
-}
-
 bool contains(const std::vector<std::uint64_t>& sorted, std::uint64_t k) {
     return std::binary_search(sorted.begin(), sorted.end(), k);
 }
