@@ -91,9 +91,11 @@ enum class KeepFilter {
 /// "faces", "volume", "fit".
 const char* to_string(KeepFilter k);
 
-/// KeepFilter::Faces: the most rounds of the face filter (each round moves the vertices less; on the study's
-/// noisy pairs the noise is reached after 2 to 7).
-inline constexpr int kMaxFaceRounds = 30;
+/// KeepFilter::Faces: the most rounds of the face filter. The risk estimate ends the rounds (kRiskPatience past
+/// its least); this only bounds the cost, each round costing 1 + kRiskProbes filters of the whole mesh. The study's
+/// pairs stop at 1 (pierrot_i3) to 43 (fandisk_n6, whose least is at round 40): a bound of 30 cut fandisk_n6 short
+/// by 0.15° face by face (docs/history/benchmarks-2026.md, "The face filter's rounds").
+inline constexpr int kMaxFaceRounds = 100;
 
 /// A kept mesh's folds are unfolded (untangle) with no vertex moving farther than this many times the input's noise
 /// (PipelineReport::noise) from where it was: the noise moved its vertices about that far along the surface (3σ holds
