@@ -316,35 +316,90 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             perturbed.push_back(make_state(std::move(moved)));
             measure(perturbed.back());
         }
-        const auto risk = [&] {  // sums in a fixed order: thread-independent
-            double residual = 0.0, divergence = 0.0;
+        // The estimate's two parts for the current round: the moves along N (each vertex's), and the divergence.
+        // Sums in a fixed order: thread-independent.
+        struct Round {
+            std::vector<Vec3d> x;   // the vertices
+            std::vector<double> r;  // their moves along N
+            double divergence = 0.0;
+            double risk = 0.0;
+        };
+        const auto measure_round = [&] {
+            Round q;
+            q.x = cur.x;
+            q.r.resize(n);
+            double residual = 0.0;
             for (std::size_t i = 0; i < n; ++i) {
-                const double r = dot(cur.x[i] - start[i], N[i]);
-                residual += r * r;
+                q.r[i] = dot(cur.x[i] - start[i], N[i]);
+                residual += q.r[i] * q.r[i];
             }
             for (std::size_t p = 0; p < perturbed.size(); ++p)
                 for (std::size_t i = 0; i < n; ++i)
-                    divergence += sign[p][i] * dot(perturbed[p].x[i] - cur.x[i], N[i]) / probe;
-            divergence /= double(perturbed.size());
-            return residual - double(n) * sigma * sigma + 2.0 * sigma * sigma * divergence;
+                    q.divergence += sign[p][i] * dot(perturbed[p].x[i] - cur.x[i], N[i]) / probe;
+            q.divergence /= double(perturbed.size());
+            q.risk = residual - double(n) * sigma * sigma + 2.0 * sigma * sigma * q.divergence;
+            return q;
         };
-        double least = risk();  // no round at all: about nσ²
-        std::vector<Vec3d> kept = cur.x, kept_filtered = cur.normal;
+        Round least = measure_round();      // no round at all: about nσ²
+        Round last = least, before, after;  // the round before the current one; those beside the least
+        bool has_before = false, has_after = false;
+        std::vector<Vec3d> kept_filtered = cur.normal;
         for (int k = 1; k <= o.normal_steps; ++k) {
             round(cur);
             for (State& st : perturbed) round(st);
             ++rep.rounds_run;
-            if (const double r = risk(); r < least) {
-                least = r;
+            Round now = measure_round();
+            if (now.risk < least.risk) {
+                before = std::move(last);
+                has_before = true;
+                least = now;
+                has_after = false;
                 rep.rounds = k;
-                kept = cur.x;
                 kept_filtered = cur.filtered;
-            } else if (k - rep.rounds >= kRiskPatience) {
-                break;
+            } else if (k == rep.rounds + 1) {
+                after = now;
+                has_after = true;
             }
+            last = std::move(now);
+            if (k - rep.rounds >= kRiskPatience) break;
         }
+        // Between the rounds: the blend (1 − a) x_k + a x_j of the least round k with the round j before or after it is an
+        // estimator too, linear in the input, and its risk estimate is quadratic in a: |r_k + a (r_j − r_k)|² − nσ² +
+        // 2σ² ((1 − a) div_k + a div_j), least at a = −(r_k · (r_j − r_k) + σ² (div_j − div_k)) / |r_j − r_k|². The
+        // rounds step the surface in jumps (a statue's first round removes most of its noise); the blend that the
+        // estimate prefers, within [0, 1] on either side, is kept where it is lower still and turns no face over
+        // against the least round's.
+        std::vector<Vec3d> kept = least.x;
+        double kept_risk = least.risk;
+        const auto blend_toward = [&](const Round& j, double side) {
+            double ra = 0.0, aa = 0.0;
+            for (std::size_t i = 0; i < n; ++i) {
+                const double d = j.r[i] - least.r[i];
+                ra += least.r[i] * d;
+                aa += d * d;
+            }
+            if (!(aa > 0.0)) return;
+            const double a = std::clamp(-(ra + sigma * sigma * (j.divergence - least.divergence)) / aa, 0.0, 1.0);
+            const double r =
+                least.risk + 2.0 * a * ra + a * a * aa + 2.0 * sigma * sigma * a * (j.divergence - least.divergence);
+            if (!(a > 0.0) || !(r < kept_risk)) return;
+            std::vector<Vec3d> x(n);
+            for (std::size_t i = 0; i < n; ++i) x[i] = least.x[i] + (j.x[i] - least.x[i]) * a;
+            for (std::size_t f = 0; f < nf; ++f) {
+                if (!live[f]) continue;
+                const auto& t = tri[f];
+                const Vec3d was = cross(least.x[t[1]] - least.x[t[0]], least.x[t[2]] - least.x[t[0]]);
+                const Vec3d now = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]);
+                if (dot(was, now) <= 0.0) return;
+            }
+            kept = std::move(x);
+            kept_risk = r;
+            rep.blend = side * a;
+        };
+        if (has_before) blend_toward(before, -1.0);
+        if (has_after) blend_toward(after, 1.0);
         rep.reverted_moves = cur.reverted;
-        rep.estimated_error = std::sqrt(std::max(least, 0.0) / double(n));
+        rep.estimated_error = std::sqrt(std::max(kept_risk, 0.0) / double(n));
         rep.rms_displacement = rms_displacement(kept);
         write_back(kept);
         if (filtered_normals) *filtered_normals = kept_filtered;

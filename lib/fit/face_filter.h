@@ -51,9 +51,11 @@ struct FaceFilterOptions {
     /// the noise's, plus twice its variance times the rounds' divergence, read from kRiskProbes copies of the
     /// input moved by kRiskProbe σ along the normals with random signs that run the same rounds. The filter
     /// runs until the estimate found no new least for kRiskPatience rounds (at most normal_steps) and returns
-    /// the mesh of the least, no round at all included. Where the discrepancy principle stops every surface
-    /// once it moved as far as the noise, this one runs a part's flat sides on while their error still falls
-    /// and stops a statue where its detail starts to go. It costs 1 + kRiskProbes times the rounds.
+    /// the mesh of the least, no round at all included, blended with the round before or after it where the
+    /// estimate of the blend (quadratic in its share) is lower still (FaceFilterReport::blend). Where the
+    /// discrepancy principle stops every surface once it moved as far as the noise, this one runs a part's flat
+    /// sides on while their error still falls and stops a statue where its detail starts to go. It costs
+    /// 1 + kRiskProbes times the rounds.
     double stop_noise = 0;
 };
 
@@ -73,6 +75,9 @@ struct FaceFilterReport {
     std::size_t reverted_moves = 0;  ///< vertex moves undone because a face would have turned over
     int rounds = 0;                  ///< rounds whose result was kept
     int rounds_run = 0;              ///< rounds run (the risk stop runs kRiskPatience past the one it keeps)
+    /// with stop_noise: the blend kept between the least round and the one after it (> 0) or before it (< 0), the
+    /// other round's share; 0: the least round itself
+    double blend = 0;
     double estimated_error = 0;   ///< with stop_noise: the risk estimate's RMS error of the kept vertices, world units
     double rms_displacement = 0;  ///< world units: the vertices' root-mean-square distance from where they began
 };

@@ -231,16 +231,22 @@ Mesh bumpy_sphere(double a) {
 TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
     // Stein's unbiased risk estimate reads the vertices' error without the clean mesh. On a noisy cube (flat sides:
     // the error falls for many rounds) and a noisy bumpy sphere (rounds erode the bumps: the error turns), the round
-    // it keeps is within a few percent of the least true error of the rounds it ran, the same mesh as that many
-    // rounds alone make, and its estimate of the squared error is within a tenth of the noise's variance.
+    // it keeps is within a few percent of the least true error of the rounds it ran; the mesh it returns is that
+    // many rounds alone, or its blend with the round before or after as the report says, no worse than the round;
+    // and its estimate of the squared error is within a tenth of the noise's variance.
     struct Case {
         Mesh clean;
         bool turns;  // the true error has its least before the rounds run out
+        NoiseDirection direction = NoiseDirection::Normal;
     };
-    for (const Case& c : {Case{test::subdivided_cube(16), false}, Case{bumpy_sphere(0.06), true}}) {
+    int blended = 0;
+    for (const Case& c :
+         {Case{test::subdivided_cube(16), false}, Case{bumpy_sphere(0.06), true}, Case{bumpy_sphere(0.1), true},
+          Case{bumpy_sphere(0.15), true}, Case{bumpy_sphere(0.03), true}}) {
         Mesh noisy = c.clean;
         NoiseOptions n;
         n.sigma = 0.3;
+        n.direction = c.direction;
         const double truth = add_noise(noisy, n).sigma_world;
         const double sigma = estimate_noise(noisy, NoiseNormals::Steady).sigma;
         FaceFilterOptions o;
@@ -253,22 +259,36 @@ TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
         // the true error of every round the run saw, each from the start
         double least = INFINITY;
         int least_round = 0;
+        std::vector<Mesh> rounds{noisy};
         for (int k = 1; k <= r.rounds_run; ++k) {
             FaceFilterOptions plain = o;
             plain.stop_noise = 0;
             plain.normal_steps = k;
-            Mesh m = noisy;
+            Mesh& m = rounds.emplace_back(noisy);
             filter_faces(m, plain);
-            if (k == r.rounds) {
-                EXPECT_EQ(m.positions, risk.positions);  // the kept round's mesh, as k rounds alone make it
-            }
             if (const double e = rms_error(m, c.clean); e < least) least = e, least_round = k;
         }
+        // the kept round's mesh, as k rounds alone make it, blended as the report says
+        ASSERT_LE(std::abs(r.blend), 1.0);
+        const Mesh& at = rounds[std::size_t(r.rounds)];
+        const Mesh& beside = rounds[std::size_t(r.rounds + (r.blend < 0 ? -1 : r.blend > 0 ? 1 : 0))];
+        double off = 0.0;
+        for (std::size_t i = 0; i < at.positions.size(); ++i) {
+            const Vec3d want =
+                Vec3d(at.positions[i]) + (Vec3d(beside.positions[i]) - Vec3d(at.positions[i])) * std::abs(r.blend);
+            off = std::max(off, norm(Vec3d(risk.positions[i]) - want));
+        }
+        EXPECT_LT(off, 1e-5) << "blend " << r.blend;
+        if (r.blend == 0) {
+            EXPECT_EQ(at.positions, risk.positions);
+        }
         const double kept = rms_error(risk, c.clean);
+        EXPECT_LE(kept, 1.01 * rms_error(at, c.clean)) << "blend " << r.blend;
+        blended += r.blend != 0;
         std::printf(
-            "risk: %d of %d rounds (least true error at %d), error %.4f against the least %.4f, estimate "
-            "%.4f, noise %.4f\n",
-            r.rounds, r.rounds_run, least_round, kept, least, r.estimated_error, truth);
+            "risk: %d of %d rounds (least true error at %d), blend %.3f, error %.4f against the least %.4f, "
+            "estimate %.4f, noise %.4f\n",
+            r.rounds, r.rounds_run, least_round, r.blend, kept, least, r.estimated_error, truth);
         EXPECT_LT(kept, 1.05 * least);
         EXPECT_NEAR(r.estimated_error * r.estimated_error, kept * kept, 0.1 * truth * truth);
         if (c.turns) {
@@ -283,6 +303,7 @@ TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
         }
         EXPECT_EQ(one.positions, risk.positions);
     }
+    EXPECT_GE(blended, 2);  // the blends are exercised (the bumpy spheres of 0.03, 0.1 and 0.15 blend)
 }
 
 TEST(FaceFilter, BadInput) {
