@@ -93,7 +93,7 @@ const char* to_string(KeepFilter k);
 
 /// KeepFilter::Faces: the most rounds of the face filter. The risk estimate ends the rounds (kRiskPatience past
 /// its least); this only bounds the cost, each round costing 1 + kRiskProbes filters of the whole mesh. The study's
-/// pairs stop at 1 (pierrot_i3) to 43 (fandisk_n6, whose least is at round 40): a bound of 30 cut fandisk_n6 short
+/// pairs keep 1 (pierrot_i3) to 40 (fandisk_n6) rounds and run 4 to 43: a bound of 30 cut fandisk_n6 short
 /// by 0.15° face by face (docs/history/benchmarks-2026.md, "The face filter's rounds").
 inline constexpr int kMaxFaceRounds = 100;
 

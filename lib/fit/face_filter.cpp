@@ -390,7 +390,8 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
                 const auto& t = tri[f];
                 const Vec3d was = cross(least.x[t[1]] - least.x[t[0]], least.x[t[2]] - least.x[t[0]]);
                 const Vec3d now = cross(x[t[1]] - x[t[0]], x[t[2]] - x[t[0]]);
-                if (dot(was, now) <= 0.0) return;
+                // a face without area in the round turns nothing over (as a round's own check has it)
+                if (dot(was, was) > 0.0 && dot(was, now) <= 0.0) return;
             }
             kept = std::move(x);
             kept_risk = r;

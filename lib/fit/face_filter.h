@@ -90,7 +90,9 @@ struct FaceFilterReport {
 /// the volume's normal at its centroid (volume_normals_at_faces), smooth and consistent but rounded
 /// over a voxel at a crease, which the patch guidance sharpens. held (optional, one flag per position)
 /// marks positions that do not move; vertices on an open boundary never move. filtered_normals (optional)
-/// receives the last round's filtered normals, one per face (a measurement: how good the target was).
+/// receives the filtered normals of the round whose mesh is kept, one per face (a measurement: how good the target
+/// was; with the risk stop the least round's, the input's own normals where no round is kept; a blended mesh lies
+/// between that round and the one beside it).
 /// No face turns over: a vertex move that would turn a face to more than 90° from its filtered normal
 /// is undone. With options.stop_displacement, the rounds stop once the vertices have moved that far; with
 /// options.stop_noise, where the estimated error is least.

@@ -237,16 +237,14 @@ TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
     struct Case {
         Mesh clean;
         bool turns;  // the true error has its least before the rounds run out
-        NoiseDirection direction = NoiseDirection::Normal;
     };
-    int blended = 0;
+    int before = 0, after = 0;  // blends toward the round before, after
     for (const Case& c :
          {Case{test::subdivided_cube(16), false}, Case{bumpy_sphere(0.06), true}, Case{bumpy_sphere(0.1), true},
           Case{bumpy_sphere(0.15), true}, Case{bumpy_sphere(0.03), true}}) {
         Mesh noisy = c.clean;
         NoiseOptions n;
         n.sigma = 0.3;
-        n.direction = c.direction;
         const double truth = add_noise(noisy, n).sigma_world;
         const double sigma = estimate_noise(noisy, NoiseNormals::Steady).sigma;
         FaceFilterOptions o;
@@ -284,7 +282,15 @@ TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
         }
         const double kept = rms_error(risk, c.clean);
         EXPECT_LE(kept, 1.01 * rms_error(at, c.clean)) << "blend " << r.blend;
-        blended += r.blend != 0;
+        before += r.blend < 0;
+        after += r.blend > 0;
+        // what the report says of the mesh returned
+        double moved = 0.0;
+        for (std::size_t i = 0; i < risk.positions.size(); ++i) {
+            const Vec3d d = Vec3d(risk.positions[i]) - Vec3d(noisy.positions[i]);
+            moved += dot(d, d);
+        }
+        EXPECT_NEAR(r.rms_displacement, std::sqrt(moved / double(risk.positions.size())), 1e-6);
         std::printf(
             "risk: %d of %d rounds (least true error at %d), blend %.3f, error %.4f against the least %.4f, "
             "estimate %.4f, noise %.4f\n",
@@ -303,7 +309,23 @@ TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
         }
         EXPECT_EQ(one.positions, risk.positions);
     }
-    EXPECT_GE(blended, 2);  // the blends are exercised (the bumpy spheres of 0.03, 0.1 and 0.15 blend)
+    // the blends are exercised on both sides (the bumpy spheres of 0.03 and 0.1 toward the round before, 0.15 after)
+    EXPECT_GE(before, 1);
+    EXPECT_GE(after, 1);
+    // no round to run: the input comes back as it was, no blend
+    Mesh same = bumpy_sphere(0.06);
+    NoiseOptions n;
+    n.sigma = 0.3;
+    add_noise(same, n);
+    const Mesh input = same;
+    FaceFilterOptions none;
+    none.normal_steps = 0;
+    none.stop_noise = estimate_noise(same, NoiseNormals::Steady).sigma;
+    const FaceFilterReport r0 = filter_faces(same, none);
+    EXPECT_EQ(r0.rounds, 0);
+    EXPECT_EQ(r0.rounds_run, 0);
+    EXPECT_EQ(r0.blend, 0.0);
+    EXPECT_EQ(same.positions, input.positions);
 }
 
 TEST(FaceFilter, BadInput) {

@@ -125,21 +125,25 @@ PipelineOptions kept() {
 
 TEST(KeptFaces, NoisyCubeAndOctahedronComeBackFlatAtTheirDihedralAngles) {
     // σ = 0.3 edges along the normals; the sides judged off their edges (the grid rounds the edges and corners);
-    // measured 0.48° / 0.68° / 0.59° and flatness 1.88 / 3.32 / 4.18 (own faces / volume-guided / fit alone)
+    // measured 0.73° / 0.68° / 0.59° and flatness 0.69 / 3.32 / 4.18 (own faces / volume-guided / fit alone); the own
+    // faces' estimated error still falls at the bound of 100 rounds (at the bound of 30: 0.48° and 1.88)
     Mesh cube = test::subdivided_cube(16);
     Mesh noisy = cube;
     NoiseOptions n;
     n.sigma = 0.3;
     add_noise(noisy, n);
     PipelineOptions o = kept();
-    const Sides truth = sides(cube, cube), own = sides(cube, smooth_mesh(noisy, o).mesh);
+    const PipelineResult own_result = smooth_mesh(noisy, o);
+    const Sides truth = sides(cube, cube), own = sides(cube, own_result.mesh);
     o.keep_filter = KeepFilter::Volume;
     const Sides guided = sides(cube, smooth_mesh(noisy, o).mesh);
     o.keep_filter = KeepFilter::Fit;
     const Sides fitted = sides(cube, smooth_mesh(noisy, o).mesh);
-    std::printf("cube: dihedral error %.2f / %.2f / %.2f deg, flatness %.3f / %.3f / %.3f (faces / volume / fit)\n",
-                dihedral_error(truth, own), dihedral_error(truth, guided), dihedral_error(truth, fitted), own.flatness,
-                guided.flatness, fitted.flatness);
+    std::printf(
+        "cube: dihedral error %.2f / %.2f / %.2f deg, flatness %.3f / %.3f / %.3f (faces / volume / fit); the "
+        "face filter kept %d of %d rounds\n",
+        dihedral_error(truth, own), dihedral_error(truth, guided), dihedral_error(truth, fitted), own.flatness,
+        guided.flatness, fitted.flatness, own_result.report.faces.rounds, own_result.report.faces.rounds_run);
     for (const Sides* s : {&own, &guided}) {
         EXPECT_LT(dihedral_error(truth, *s), 1.0);
         EXPECT_LT(s->flatness, 0.15 * sides(cube, noisy).flatness);
@@ -364,6 +368,9 @@ TEST(KeptFaces, TheRiskEstimateNotTheBoundEndsAPartsRounds) {
     EXPECT_GT(free.report.faces.rounds, 30);
     EXPECT_EQ(free.report.faces.rounds_run, free.report.faces.rounds + kRiskPatience);
     EXPECT_LT(free.report.faces.rounds_run, kMaxFaceRounds);
+    const std::string json = to_json(free.report).dump();  // the report gives the rounds and the blend
+    EXPECT_NE(json.find("\"face_filter\":{"), std::string::npos);
+    EXPECT_NE(json.find("\"blend\":"), std::string::npos);
     o.faces.normal_steps = 30;
     const PipelineResult cut = smooth_mesh(noisy, o);
     EXPECT_EQ(cut.report.faces.rounds_run, 30);
