@@ -289,6 +289,11 @@ std::vector<OptionSpec> make_table() {
         row("face-patch", "pipeline.faces.patch_guidance", G::OutputMesh, T::Library, S,
             [](RunOptions& o) -> auto& { return o.pipeline.faces.patch_guidance; },
             "keep: the face filter's guidance is each face's most consistent patch"),
+        choices(row("face-saliency", "pipeline.faces.saliency", G::OutputMesh, T::Library, S,
+                    [](RunOptions& o) -> auto& { return o.pipeline.faces.saliency; },
+                    "keep: a patch's consistency includes its relative saliency (Zhang et al.): on, off, or chosen, "
+                    "both run and the one of lower estimated error kept"),
+                names({PatchSaliency::Off, PatchSaliency::On, PatchSaliency::Chosen})),
         range(row("face-own-patch", "pipeline.faces.own_patch_bias", G::OutputMesh, T::Library, S,
                   [](RunOptions& o) -> auto& { return o.pipeline.faces.own_patch_bias; },
                   "keep: a neighbour's patch guides a face when its spread is below this fraction of the face's own"),

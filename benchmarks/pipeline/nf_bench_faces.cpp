@@ -208,9 +208,11 @@ int main(int argc, char** argv) {
         std::vector<Vec3d> target;
         const FaceFilterReport r = filter_faces(m, d, nullptr, nullptr, &target);
         std::printf(
-            "%s %.2f: %d rounds (%d run), %.2f deg, %.2f s, faces off their filtered normals %.2f deg, %zu reverted\n",
+            "%s %.2f: %d rounds (%d run), %.2f deg, %.2f s, faces off their filtered normals %.2f deg, %zu reverted, "
+            "estimated error %.4f of the noise\n",
             risk ? "risk" : "discrepancy", risk ? 1.0 : discrepancy, r.rounds, r.rounds_run,
-            correspondence_errors(m, gt).mean_face_angle_deg, c.lap(), mean_angle(target, m), r.reverted_moves);
+            correspondence_errors(m, gt).mean_face_angle_deg, c.lap(), mean_angle(target, m), r.reverted_moves,
+            d.stop_noise > 0 ? r.estimated_error / d.stop_noise : 0.0);
         if (!out.empty()) write_mesh(out, m);
         return 0;
     }

@@ -1,10 +1,12 @@
 #include "fit/face_filter.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -36,6 +38,15 @@ struct Rows {
 
 }  // namespace
 
+const char* to_string(PatchSaliency s) {
+    switch (s) {
+        case PatchSaliency::Off: return "off";
+        case PatchSaliency::On: return "on";
+        case PatchSaliency::Chosen: return "chosen";
+    }
+    return "?";
+}
+
 FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::vector<Vec3d>* guidance,
                               const std::vector<char>* held, std::vector<Vec3d>* filtered_normals) {
     if (o.normal_steps < 0 || o.vertex_steps < 0 || o.rings < 1 || !(o.sigma_r > 0) || !(o.sigma_s > 0) ||
@@ -46,6 +57,27 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             "filter_faces: normal_steps and vertex_steps must be >= 0, rings >= 1, sigma_r and sigma_s finite and > 0, "
             "own_patch_bias in (0, 1], stop_displacement and stop_noise finite and >= 0, not both > 0");
     check_mesh(m, "filter_faces");
+    if (o.saliency == PatchSaliency::Chosen) {
+        // Both measures of a patch's consistency, and the one whose rounds the risk estimate finds of least error
+        if (!(o.stop_noise > 0) || !o.patch_guidance) {
+            FaceFilterOptions plain = o;
+            plain.saliency = PatchSaliency::Off;
+            return filter_faces(m, plain, guidance, held, filtered_normals);
+        }
+        Mesh with = m;
+        FaceFilterOptions off = o, on = o;
+        off.saliency = PatchSaliency::Off;
+        on.saliency = PatchSaliency::On;
+        std::vector<Vec3d> normals_on;
+        FaceFilterReport rep_on = filter_faces(with, on, guidance, held, filtered_normals ? &normals_on : nullptr);
+        FaceFilterReport rep_off = filter_faces(m, off, guidance, held, filtered_normals);
+        if (rep_on.estimated_error < rep_off.estimated_error) {
+            m.positions = std::move(with.positions);
+            if (filtered_normals) *filtered_normals = std::move(normals_on);
+            return rep_on;
+        }
+        return rep_off;
+    }
     const std::size_t nf = m.triangles.size();
     if (guidance && guidance->size() != nf)
         throw InvalidInput("filter_faces: " + std::to_string(guidance->size()) + " guidance normals for " +
@@ -54,6 +86,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
         throw InvalidInput("filter_faces: " + std::to_string(held->size()) + " held flags for " +
                            std::to_string(m.positions.size()) + " positions");
     FaceFilterReport rep;
+    rep.salient = o.patch_guidance && o.saliency == PatchSaliency::On;
     std::vector<std::uint32_t> group;
     const std::size_t n = detail::weld(m, group);
     std::vector<Vec3d> x(n);
@@ -124,6 +157,31 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
     };
     const Rows patch = build_rows(1);
     const Rows hood = o.rings == 1 ? patch : build_rows(o.rings);
+    const bool salient = o.patch_guidance && o.saliency == PatchSaliency::On;
+    // face → the face across each of its edges (none where the edge is not shared by exactly two), for the saliency
+    constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+    std::vector<std::array<std::uint32_t, 3>> across(salient ? nf : 0, {kNone, kNone, kNone});
+    if (salient) {
+        std::vector<std::tuple<std::uint32_t, std::uint32_t, std::uint32_t, int>> es;
+        for (std::size_t f = 0; f < nf; ++f)
+            if (live[f])
+                for (int e = 0; e < 3; ++e) {
+                    const std::uint32_t a = tri[f][std::size_t(e)], b = tri[f][std::size_t((e + 1) % 3)];
+                    es.emplace_back(std::min(a, b), std::max(a, b), std::uint32_t(f), e);
+                }
+        std::sort(es.begin(), es.end());
+        for (std::size_t i = 0; i < es.size();) {
+            std::size_t j = i;
+            while (j < es.size() && std::get<0>(es[j]) == std::get<0>(es[i]) &&
+                   std::get<1>(es[j]) == std::get<1>(es[i]))
+                ++j;
+            if (j - i == 2) {
+                across[std::get<2>(es[i])][std::size_t(std::get<3>(es[i]))] = std::get<2>(es[i + 1]);
+                across[std::get<2>(es[i + 1])][std::size_t(std::get<3>(es[i + 1]))] = std::get<2>(es[i]);
+            }
+            i = j;
+        }
+    }
 
     // The state one run of the rounds changes: the vertices and what is measured from them. The risk stop runs
     // kRiskProbes perturbed states in step with the first.
@@ -205,6 +263,20 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
                 double spread = 0.0;
                 for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
                     if (st.area[*k] > 0) spread = std::max(spread, norm(st.base[*k] - mean));
+                if (salient) {
+                    // Zhang et al.'s relative saliency: the largest normal difference across an edge inside the
+                    // patch over their sum. Noise spreads its differences over every edge; a crease puts them on a
+                    // few.
+                    double most = 0.0, sum = 0.0;
+                    for (const std::uint32_t* k = patch.begin(j); k != patch.end(j); ++k)
+                        for (const std::uint32_t nb : across[*k])
+                            if (nb != kNone && nb > *k && std::binary_search(patch.begin(j), patch.end(j), nb)) {
+                                const double d = norm(st.base[*k] - st.base[nb]);
+                                most = std::max(most, d);
+                                sum += d;
+                            }
+                    spread *= most / (1e-9 + sum);
+                }
                 st.spread[j] = spread;
             });
             parallel(nf, [&](std::size_t f) {

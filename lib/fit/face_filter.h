@@ -14,6 +14,16 @@
 
 namespace normalflow {
 
+/// How the patch guidance measures a patch's consistency (FaceFilterOptions::saliency).
+enum class PatchSaliency {
+    Off,     ///< its spread alone
+    On,      ///< its spread times its relative saliency (Zhang et al. 2015)
+    Chosen,  ///< with stop_noise, both run and the one of the lower risk estimate is kept; otherwise Off
+};
+
+/// "off", "on", "chosen".
+const char* to_string(PatchSaliency s);
+
 /// Options for filter_faces.
 struct FaceFilterOptions {
     int normal_steps = 1;   ///< >= 0: rounds of guidance, joint bilateral filter and vertex update; 0: none
@@ -39,6 +49,16 @@ struct FaceFilterOptions {
     /// normal is tilted by the curvature: 1 is Zhang et al.'s choice of the most consistent patch,
     /// smaller keeps the own patch unless a crease runs through it. In (0, 1].
     double own_patch_bias = 0.35;
+    /// The patch's spread times its relative saliency (Zhang et al.'s consistency): the largest normal difference
+    /// across an edge inside the patch over the sum of them all. Noise spreads its differences over every edge and a
+    /// crease puts them on a few, so a patch that straddles a crease counts as less consistent still and the
+    /// guidance keeps to one side of a crease through heavier noise; on a curved surface it moves the guidance to a
+    /// neighbour's patch, tilted by the curvature, more often. Chosen runs the rounds both ways and keeps the one of
+    /// lower estimated error (the risk stop's, so only with stop_noise; otherwise Off), at twice the cost. Off by
+    /// default: in the study's pipeline On gains the CAD parts (twelve_imp0.5 0.85° face by face, fandisk_n0.3
+    /// 0.25°) and costs the smooth ones (sharpsphere 0.23°), and Chosen, whose estimate picks On on sharpsphere and
+    /// igea too, keeps both trades (docs/history/benchmarks-2026.md, "The patch's saliency").
+    PatchSaliency saliency = PatchSaliency::Off;
     /// World units, >= 0. > 0: the rounds stop once the vertices' root-mean-square distance from where
     /// they started reaches this length (normal_steps is then the most rounds). Given the input's noise
     /// (estimate_noise), this is Morozov's discrepancy principle: remove as much as the noise, no more.
@@ -78,6 +98,7 @@ struct FaceFilterReport {
     /// with stop_noise: the blend kept between the least round and the one after it (> 0) or before it (< 0), the
     /// other round's share; 0: the least round itself
     double blend = 0;
+    bool salient = false;         ///< the patches' consistency included their saliency (PatchSaliency)
     double estimated_error = 0;   ///< with stop_noise: the risk estimate's RMS error of the kept vertices, world units
     double rms_displacement = 0;  ///< world units: the vertices' root-mean-square distance from where they began
 };
