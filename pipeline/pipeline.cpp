@@ -162,11 +162,12 @@ struct ScanInput {
     const Mesh* mesh = nullptr;
     PipelineOptions o;
     std::unique_ptr<ClosestTriangleQuery> query;
+    BrickPlan plan;  ///< where the run is bricked: the plan's band (compact or not, the blocks it expects)
 };
 
 /// Repair, resolution, memory check (and the bricks, where allowed: a run of the engine) and the search.
 ScanInput prepare_scan(const Mesh& input, const PipelineOptions& options, PipelineReport& r, Progress* progress,
-                       bool bricks_allowed) {
+                       bool bricks_allowed, bool one_pass = false) {
     ScanInput in;
     in.o = options;
     PipelineOptions& o = in.o;
@@ -198,7 +199,8 @@ ScanInput prepare_scan(const Mesh& input, const PipelineOptions& options, Pipeli
         const double h = scan_grid(mesh, r.scan_options).voxel_size;
         const SmoothOptions so = engine_options(o, h, model_length_scale(input), 0.0);
         const int halo = o.brick_halo_voxels > 0 ? o.brick_halo_voxels : brick_halo_voxels(so, 1);
-        const BrickPlan plan = plan_bricks(mesh, o, h, halo, &so);
+        const BrickPlan plan = plan_bricks(mesh, o, h, halo, &so, one_pass);
+        in.plan = plan;
         o.brick_voxels = plan.brick_voxels;
         o.brick_halo_voxels = halo;
         r.memory_estimate_bytes = plan.estimate_bytes;
@@ -235,6 +237,8 @@ Volume scan_and_smooth_in_bricks(const ScanInput& in, const Mesh& input, Pipelin
     BrickOptions b;
     b.brick_voxels = in.o.brick_voxels;
     b.halo_voxels = in.o.brick_halo_voxels;
+    b.compact_band = in.plan.compact_band;
+    b.expected_band_blocks = std::size_t(in.plan.band_blocks);
     r.scan.grid = grid;
     // Elsewhere, as messages: the context (with the search the workers are to build) once per run.
     std::string context;
@@ -436,7 +440,8 @@ SmoothOptions engine_options(const PipelineOptions& o, double voxel_size, double
     return so;
 }
 
-BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int halo_voxels, const SmoothOptions* engine) {
+BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int halo_voxels, const SmoothOptions* engine,
+                      bool one_pass) {
     BrickPlan plan;
     const ScanConvertOptions s = effective_scan_options(o);
     const MemoryEstimate e = estimate_memory(m, h, s.half_width);
@@ -454,11 +459,14 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
     const SmoothOptions so = engine ? *engine : engine_options(o, h, model_length_scale(m), 0.0);
     const BlockCounts blocks = count_blocks(m, grid, s.shell_thickness);
     plan.band_blocks = blocks.total;
-    // The result's band per copy (φ alone: one float of each of the engine's samples, and the block table). What no
-    // brick size lowers: the mesh and two copies of it, held whole between iterations.
-    const double band_bytes = blocks.total * 512 * 4 + e.grid_samples / 512 * 4;
-    const double held = e.mesh_bytes + 2 * band_bytes;
-    const auto estimate = [&](int brick) {
+    // What no brick size lowers: the mesh and the result's band, held whole between passes (φ alone: one float, or 16
+    // bits where compact, of each of the engine's samples, and the block table). A pass that scans holds one copy, the
+    // one it writes; a later pass two, the last pass's (which its windows read) and the one it writes; the closing
+    // reinitialisation two, with windows that only reinitialise.
+    const auto held = [&](int copies, bool compact) {
+        return e.mesh_bytes + copies * (blocks.total * 512 * (compact ? 2 : 4) + e.grid_samples / 512 * 4);
+    };
+    const auto estimate = [&](int brick, bool compact) {
         // the most blocks one window holds: its engine's arrays, and the scanned window it starts from (φ of at most
         // as many blocks)
         const BrickBlocks cut = brick_blocks(so, brick, halo_voxels);
@@ -470,27 +478,37 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
                                                        {i0 + cut.brick + cut.halo, j0 + cut.brick + cut.halo,
                                                         k0 + cut.brick + cut.halo}));
         plan.window_blocks = worst;
-        return held + kEngineRoundingBytes + worst * 512 * (kEngineBytesPerSample + 4);
+        const double passes =
+            held(one_pass ? 1 : 2, compact) + kEngineRoundingBytes + worst * 512 * (kEngineBytesPerSample + 4);
+        const double closing = held(2, compact) + kEngineRoundingBytes + worst * 512 * kReinitialiseBytesPerSample;
+        return std::max(passes, closing);
     };
+    // The band in floats at every size first (bricks hold the whole run's surface to float rounding), then, in a run of
+    // one pass, in 16 bits: only the closing reinitialisation reads it back (within 0.001 voxel of the floats; a second
+    // pass of the filters from it moved a surface 0.01 to 0.12 voxel, as their choices amplify the change).
     double smallest = 0;
     int tried = 0;
-    for (const int brick : {512, 384, 256, 192, 128, 96, 64}) {
-        if (o.brick_voxels > 0 && brick != 512) break;  // the size given, once
-        tried = o.brick_voxels > 0 ? o.brick_voxels : brick;
-        const double need = estimate(tried);
-        smallest = need;
-        if (limit == 0 || need <= double(limit)) {
-            plan.brick_voxels = tried;
-            plan.estimate_bytes = need;
-            return plan;
+    for (const bool compact : {false, true})
+        for (const int brick : {512, 384, 256, 192, 128, 96, 64}) {
+            if (compact && !one_pass) break;
+            if (o.brick_voxels > 0 && brick != 512) break;  // the size given, once
+            tried = o.brick_voxels > 0 ? o.brick_voxels : brick;
+            const double need = estimate(tried, compact);
+            smallest = need;
+            if (limit == 0 || need <= double(limit)) {
+                plan.brick_voxels = tried;
+                plan.estimate_bytes = need;
+                plan.compact_band = compact;
+                return plan;
+            }
         }
-    }
-    throw OutOfMemory(
-        "this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
-        (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) + " voxels (" +
-        format_bytes(held) + " of it the mesh and the result's band, held whole whatever the bricks), more than the " +
-        format_bytes(double(limit)) + (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
-        "; lower --resolution or raise --max-memory");
+    throw OutOfMemory("this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
+                      (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) +
+                      " voxels (" + format_bytes(held(one_pass ? 1 : 2, one_pass)) +
+                      " of it the mesh and the result's band, held whole whatever the bricks), more than the " +
+                      format_bytes(double(limit)) +
+                      (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
+                      "; lower --resolution or raise --max-memory");
 }
 
 Volume mesh_to_volume(const Mesh& input, const PipelineOptions& options, PipelineReport* report, Progress* progress) {
@@ -871,7 +889,10 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
     }
     // The engine brick by brick where the whole volume does not fit the memory (or bricks were asked for); not for
     // the fit to the normal map, which reads the engine's last normals.
-    const ScanInput scan_input = prepare_scan(m, scan, r, progress, engine && !o.fit_to_normal_map);
+    // A closed input kept on its own faces reads the engine's volume only for the guard and the unfolding: the engine
+    // stops after its first iteration (and in bricks holds one copy of the result's band while it runs).
+    const bool early = own_faces && !open && keep;
+    const ScanInput scan_input = prepare_scan(m, scan, r, progress, engine && !o.fit_to_normal_map, early);
     const bool bricked = engine && scan_input.o.brick_voxels > 0;
     if (bricks && *bricks && !bricked)
         r.warnings.push_back(engine ? "the run fits in memory whole: it ran here, not in bricks on the workers (give "
@@ -948,10 +969,7 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         check_output(kept, r, false, false, r.input_self_intersections);
         return kept;
     };
-    // A closed input kept on its own faces reads the engine's volume only for the guard and the unfolding: the engine
-    // stops after its first iteration.
     const SmoothCheckpoint go_on = [](const Volume&) { return false; };
-    const bool early = own_faces && !open && keep;
     if (bricked)
         v = scan_and_smooth_in_bricks(scan_input, m, r, progress, early ? &go_on : nullptr, bricks);
     else if (engine)

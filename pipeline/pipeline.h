@@ -504,9 +504,14 @@ int auto_resolution(const Mesh& m, const PipelineOptions& options);
 
 /// The bricks a smoothing run of m takes (PipelineOptions::brick_voxels): their side in voxels (0: none, the whole
 /// volume at once) and the estimated peak. With brick_voxels = 0, none where the whole run's estimate (check_memory)
-/// fits the limit; otherwise the largest side of 512, 384, 256, 192, 128, 96 or 64 voxels whose estimate fits: the
-/// mesh and its search trees, two copies of the result's band (φ only: the last pass's, which the windows read, and
-/// this one's) and one window's engine and scanned volume. The blocks are counted, not estimated from the area: those
+/// fits the limit; otherwise the largest side of 512, 384, 256, 192, 128, 96 or 64 voxels whose estimate fits, with
+/// the result's band held in floats, and failing that, in a run of one pass, in 16 bits (compact_band: only the
+/// closing reinitialisation reads it back). The estimate: the mesh and its search
+/// trees, the result's band (φ only) and one window's engine and scanned volume; two copies of the band in a pass
+/// after the first (the last pass's, which the windows read, and this one's), one in the first (the one it writes),
+/// and two in the closing reinitialisation, whose windows hold less. one_pass: the run stops after its first pass (a
+/// checkpoint: a closed mesh kept on its own faces), so no pass but the closing one holds two copies. The blocks
+/// are counted, not estimated from the area: those
 /// the input's surface passes within a voxel of and their 26 neighbours, as the engine allocates them, over the whole
 /// grid for the band and within each window (brick and halo, cut as smooth_in_bricks cuts them) for the engine.
 /// halo_voxels: the halo the engine needs (voxels); engine: the options the bricks will run with, whose filters' sample
@@ -515,11 +520,12 @@ int auto_resolution(const Mesh& m, const PipelineOptions& options);
 struct BrickPlan {
     int brick_voxels = 0;
     double estimate_bytes = 0;
-    double band_blocks = 0;    ///< blocks of the result's band, counted (0 where the whole volume fits)
-    double window_blocks = 0;  ///< the most blocks one window's engine holds at the size chosen, counted (likewise)
+    double band_blocks = 0;     ///< blocks of the result's band, counted (0 where the whole volume fits)
+    double window_blocks = 0;   ///< the most blocks one window's engine holds at the size chosen, counted (likewise)
+    bool compact_band = false;  ///< the result's band held in 16 bits (BrickOptions::compact_band): floats do not fit
 };
 BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& options, double voxel_size, int halo_voxels,
-                      const SmoothOptions* engine = nullptr);
+                      const SmoothOptions* engine = nullptr, bool one_pass = false);
 
 /// The engine's options of a run on a grid of voxel_size: options.smooth with its length scale in voxels
 /// (options.length_scale, or default_length_scale) and sigma_spatial's automatic value (auto_sigma_spatial of noise)

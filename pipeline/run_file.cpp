@@ -137,7 +137,8 @@ void stop_notes(const PipelineOptions& opt, const PipelineReport& r, FileRun& f)
                           std::to_string(r.bricks.halo_voxels) +
                           (opt.brick_voxels > 0 ? " (--brick-size)"
                                                 : ", the whole volume being more than the memory allows (about " +
-                                                      format_bytes(r.memory_estimate_bytes) + " in bricks)"));
+                                                      format_bytes(r.memory_estimate_bytes) + " in bricks)") +
+                          (r.bricks.compact_band ? "; the result's band held in 16 bits between passes to fit" : ""));
     if (r.smooth.stopped_unchanged)
         f.notes.push_back(
             "stopped after main iteration " + std::to_string(r.smooth.iterations_run()) + " of " +

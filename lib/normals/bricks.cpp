@@ -56,8 +56,99 @@ struct Pass {
     bool refit_energy_aligned = true;  // every brick checked D as often (none restarted its refit)
 };
 
+// The result's band as the run holds it between passes: a volume's blocks and tiles, their values in floats or
+// (BrickOptions::compact_band) in 16 bits over [−background, background], half the bytes, within 1/65534 of
+// the background (2·10⁻⁵ of a voxel at a band of 3 voxels). Its arrays are reserved for the blocks the run expects,
+// so that growing them never holds an old and a new copy at once.
+class HeldBand {
+public:
+    void reset(const Grid& g, bool compact, std::size_t expected_blocks) {
+        v_ = Volume(g, engine::kHalfWidth);
+        compact_ = compact;
+        q_.clear();
+        q_.shrink_to_fit();
+        v_.block_coords.reserve(expected_blocks);
+        if (compact)
+            q_.reserve(expected_blocks * kBlockVoxels);
+        else
+            v_.values.reserve(expected_blocks * kBlockVoxels);
+    }
+    const Volume& layout() const { return v_; }  ///< grid, tables and tiles (values only where not compact)
+    std::size_t block_count() const { return v_.block_count(); }
+    void set_tile(int i, int j, int k, std::int32_t tile) { v_.block_table[v_.table_index(i, j, k)] = tile; }
+    /// Block (i, j, k) set to src, clamped to ±background.
+    void write(int i, int j, int k, const float* src) {
+        const float bg = v_.background;
+        if (!compact_) {
+            float* dst = v_.block_values(v_.allocate_block(i, j, k));
+            for (int x = 0; x < kBlockVoxels; ++x) dst[x] = std::clamp(src[x], -bg, bg);
+            return;
+        }
+        std::int32_t& slot = v_.block_table[v_.table_index(i, j, k)];
+        if (slot < 0) {
+            slot = std::int32_t(v_.block_coords.size());
+            v_.block_coords.push_back({i, j, k});
+            q_.resize(q_.size() + kBlockVoxels);
+        }
+        std::int16_t* dst = q_.data() + std::size_t(slot) * kBlockVoxels;
+        const float to = float(kLevels) / bg;
+        for (int x = 0; x < kBlockVoxels; ++x) dst[x] = std::int16_t(std::lround(std::clamp(src[x], -bg, bg) * to));
+    }
+    /// The 512 values of allocated block slot s.
+    void read(std::int32_t s, float* dst) const {
+        if (!compact_) {
+            std::copy_n(v_.values.data() + std::size_t(s) * kBlockVoxels, kBlockVoxels, dst);
+            return;
+        }
+        const std::int16_t* src = q_.data() + std::size_t(s) * kBlockVoxels;
+        const float from = v_.background / float(kLevels);
+        for (int x = 0; x < kBlockVoxels; ++x) dst[x] = float(src[x]) * from;
+    }
+    /// f(value) for every value of every allocated block, in order.
+    template <class F>
+    void for_each_value(F&& f) const {
+        if (!compact_) {
+            for (const float x : v_.values) f(x);
+            return;
+        }
+        const float from = v_.background / float(kLevels);
+        for (const std::int16_t x : q_) f(float(x) * from);
+    }
+    /// Every value moved by d (world units), clamped to ±background.
+    void shift(float d) {
+        const float bg = v_.background;
+        if (!compact_) {
+            for (float& x : v_.values) x = std::clamp(x + d, -bg, bg);
+            return;
+        }
+        const float from = bg / float(kLevels), to = float(kLevels) / bg;
+        for (std::int16_t& x : q_) x = std::int16_t(std::lround(std::clamp(float(x) * from + d, -bg, bg) * to));
+    }
+    /// As a volume of floats: the held one itself, or (compact) a copy.
+    const Volume& volume(Volume& scratch) const {
+        if (!compact_) return v_;
+        scratch = v_;
+        scratch.values.resize(v_.block_count() * kBlockVoxels);
+        for (std::size_t b = 0; b < v_.block_count(); ++b) read(std::int32_t(b), scratch.block_values(std::int32_t(b)));
+        return scratch;
+    }
+    Volume take() && {
+        if (!compact_) return std::move(v_);
+        Volume out;
+        volume(out);
+        return out;
+    }
+
+private:
+    static constexpr int kLevels = 32767;
+    Volume v_;
+    std::vector<std::int16_t> q_;
+    bool compact_ = false;
+};
+
 // The blocks of `from` in window w, as a volume of their own (the window's grid, the same band and tiles).
-Volume window_of(const Volume& from, const BlockWindow& w) {
+Volume window_of(const HeldBand& held, const BlockWindow& w) {
+    const Volume& from = held.layout();
     Volume v(window_grid(from.grid, w), from.half_width);
     v.background = from.background;
     for (int k = w.lo[2]; k < w.hi[2]; ++k)
@@ -69,7 +160,7 @@ Volume window_of(const Volume& from, const BlockWindow& w) {
                     continue;
                 }
                 const std::int32_t d = v.allocate_block(i - w.lo[0], j - w.lo[1], k - w.lo[2]);
-                std::copy_n(from.block_values(s), kBlockVoxels, v.block_values(d));
+                held.read(s, v.block_values(d));
             }
     return v;
 }
@@ -144,11 +235,11 @@ BrickRunner run_on_threads(int at_once) {
 // One main iteration over the bricks: each brick's window, scan-converted (the first iteration) or copied from the
 // last iteration's result `from`, runs one iteration of the engine; its interior goes into `to`.
 // reinitialise_only: each window of `from` only reinitialised (reinitialise_volume), as a run ends.
-Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks, int halo_blocks, const Volume* from,
-              Volume& to, BrickReport& rep, Progress* progress, double done_before, double share,
+Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks, int halo_blocks, const HeldBand* from,
+              HeldBand& to, BrickReport& rep, Progress* progress, double done_before, double share,
               bool reinitialise_input, bool reinitialise_only = false, const BrickRefit& refit = {}) {
     Pass result;
-    const auto& gbd = to.block_dims;
+    const auto& gbd = to.layout().block_dims;
     std::array<int, 3> n{};
     for (int a = 0; a < 3; ++a) n[a] = (gbd[a] + brick_blocks - 1) / brick_blocks;
     const int total = n[0] * n[1] * n[2];
@@ -240,15 +331,12 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
             for (int j = 0; j < in.block_dims[1]; ++j)
                 for (int i = 0; i < in.block_dims[0]; ++i) {
                     const std::int32_t s = in.block_table[in.table_index(i, j, k)];
-                    if (s < 0) {
-                        to.block_table[to.table_index(i + lo[0], j + lo[1], k + lo[2])] = s;
-                        continue;
-                    }
-                    const float* src = in.block_values(s);
-                    float* dst = to.block_values(to.allocate_block(i + lo[0], j + lo[1], k + lo[2]));
                     // a window without a surface kept the scan's narrower band: its values are distances all the
                     // same, clamped where the result's band is wider
-                    for (int v = 0; v < kBlockVoxels; ++v) dst[v] = std::clamp(src[v], -to.background, to.background);
+                    if (s < 0)
+                        to.set_tile(i + lo[0], j + lo[1], k + lo[2], s);
+                    else
+                        to.write(i + lo[0], j + lo[1], k + lo[2], in.block_values(s));
                 }
         detail::tick(progress, done_before + share * double(next) / total, "smooth_in_bricks");
     };
@@ -264,17 +352,17 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
 /// the first from the volume the bricks' interiors gained and its slope, the others from the change a shift makes
 /// on the samples within half a voxel of the surface, all of which an engine's active band holds. With the first step
 /// alone the surface stood up to 0.02 voxel from the whole run's after two iterations.
-float volume_shift(const Volume& v, double gained, double slope) {
+float volume_shift(const HeldBand& v, double gained, double slope) {
     float shift = float(gained / slope);
-    const float h = float(v.grid.voxel_size);
+    const float h = float(v.layout().grid.voxel_size);
     for (int it = 1; it < engine::kVolumeNewtonSteps; ++it) {
         double change = 0.0, at = 0.0;  // the volume's change from shift 0 to shift, and its slope there
-        for (const float x : v.values) {
+        v.for_each_value([&](const float x) {
             const float f = x / h;
-            if (!(std::abs(f) < 0.5f + std::abs(shift))) continue;
+            if (!(std::abs(f) < 0.5f + std::abs(shift))) return;
             change += double(engine::inside_share(f + shift) - engine::inside_share(f));
             at += engine::on_slope(f + shift) ? 1.0 : 0.0;
-        }
+        });
         if (!(at > 0.0)) break;
         shift += float((gained + change) / at);
     }
@@ -431,11 +519,18 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
                              : bricks.concurrent > 1 ? run_on_threads(bricks.concurrent)
                                                      : BrickRunner(run_here);
     rep.elsewhere = runner && *runner;
+    rep.compact_band = bricks.compact_band;
     SmoothReport sr;
-    Volume cur, next;
+    HeldBand cur, next;
+    // the blocks the next pass is expected to write: the plan's count, or the last pass's (its arrays reserved for them)
+    std::size_t expected = bricks.expected_band_blocks;
+    const auto fresh = [&] {
+        expected = std::max(expected, cur.block_count() + cur.block_count() / 8);
+        next.reset(grid, bricks.compact_band, expected);
+    };
     bool raw = false;  // cur is as the last refit left it: its band not moved, φ not reinitialised
     const auto reinitialise = [&] {
-        next.reset(grid, engine::kHalfWidth);
+        fresh();
         run_pass(context, run, brick_blocks, halo_blocks, &cur, next, rep, progress, 1.0, 0.0, false, true);
         cur = std::move(next);
         raw = false;
@@ -451,7 +546,7 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     const bool checked_refit = opt.refit_super_steps > 0 && opt.mode != SmoothMode::MeanCurvature &&
                                (is_neighbourhood_filter(opt.mode) || opt.mode == SmoothMode::TotalVariation);
     for (int it = 0; it < iterations; ++it) {
-        next.reset(grid, engine::kHalfWidth);
+        fresh();
         const double share = 1.0 / iterations;
         BrickRefit refit;
         const auto pass = [&] {
@@ -481,7 +576,7 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
             if (d.then == Then::KeepAll) break;
             const bool replayable = d.then == Then::Stop || (d.then == Then::Restart && d.time_kept > 0.0 &&
                                                              refit.replay_count + 1 < kRefitSuperStepAttempts);
-            next.reset(grid, engine::kHalfWidth);
+            fresh();
             ++rep.refit_passes_redone;
             if (!replayable) {
                 refit = BrickRefit{.whole_time = false};
@@ -511,8 +606,7 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         if (keep_volume && p.moved && p.volume_slope > 0) {
             // φ grows by the volume gained over its slope: the surface moves back inwards by as much
             const float shift = volume_shift(cur, p.volume_change, p.volume_slope);  // voxels
-            const float d = float(double(shift) * grid.voxel_size);
-            for (float& x : cur.values) x = std::clamp(x + d, -cur.background, cur.background);
+            cur.shift(float(double(shift) * grid.voxel_size));
             p.record.volume_shift = float(-shift);
         }
         sr.iterations.push_back(p.record);
@@ -527,7 +621,8 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         }
         if (more && checkpoint && *checkpoint) {
             reinitialise();
-            if (!(*checkpoint)(cur)) {
+            Volume scratch;
+            if (!(*checkpoint)(cur.volume(scratch))) {
                 sr.stopped_at_checkpoint = true;
                 break;
             }
@@ -537,7 +632,7 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
     sr.seconds_refit = rep.seconds_smooth;
     if (smooth_report) *smooth_report = std::move(sr);
     if (report) *report = rep;
-    return cur;
+    return std::move(cur).take();
 }
 
 }  // namespace normalflow

@@ -30,6 +30,15 @@ struct BrickOptions {
     /// faster (fandisk_n0.3 at 256 in bricks of 128: 23.2 s and 226 MB against 26.4–27.0 s and 393 MB with 2 at
     /// once), so the pipeline keeps 1.
     int concurrent = 1;
+    /// The result's band held between passes in 16 bits per sample instead of a float (within 2·10⁻⁵ voxel at the
+    /// engine's band of 3 voxels), half of what the run holds whole besides a window. Meant for a run that stops after
+    /// its first pass (a checkpoint), where only the closing reinitialisation reads it back: within 10⁻³ voxel of the
+    /// floats (tests/normals/test_bricks.cpp). A second pass of the filters from it moved a test scene's surface by
+    /// 0.01 to 0.12 voxel (their choices amplify the change). plan_bricks asks for it where floats do not fit.
+    bool compact_band = false;
+    /// The blocks the result's band is expected to hold (plan_bricks's count; 0: unknown): its arrays are reserved for
+    /// them, so that growing one never holds two copies at once.
+    std::size_t expected_band_blocks = 0;
 };
 
 /// The halo smooth_in_bricks gives a brick by default: what one main iteration reaches, times the iterations, and
@@ -62,6 +71,7 @@ struct BrickReport {
     double seconds_smooth = 0;              ///< wall seconds of the engine over the bricks (reinitialisation too)
                                             ///< (summed over the bricks, where ever they ran)
     bool elsewhere = false;                 ///< the bricks ran where a BrickRunner sent them
+    bool compact_band = false;              ///< the result's band was held in 16 bits (BrickOptions::compact_band)
     /// passes run again because the whole surface's refit would not have kept every super step (smooth_in_bricks):
     /// with its decision replayed in every brick, or (refit_passes_windowed of them) each brick deciding in its window
     int refit_passes_redone = 0;

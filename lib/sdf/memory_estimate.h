@@ -16,6 +16,9 @@ namespace normalflow {
 /// Bytes the engine holds per sample of an allocated block: φ and its twin, three normal fields of three components
 /// and H_N (12 floats, engine::WorkBuffers in lib/band/band.h), and the mask's byte.
 inline constexpr double kEngineBytesPerSample = 12 * 4 + 1;
+/// Bytes a window that is only reinitialised (a run in bricks closing) holds per sample: the window as a volume, φ,
+/// its twin and the spare the reinitialisation writes (floats), and the mask's byte.
+inline constexpr double kReinitialiseBytesPerSample = 4 * 4 + 1;
 /// Arrays the engine maps in huge pages (the 12 floats and the mask), each rounded up to 2 MiB.
 inline constexpr double kEngineRoundingBytes = 13.0 * (2 << 20);
 /// What a run holds per input triangle besides the volume, at its peak: the mesh as read and as repaired, the closest

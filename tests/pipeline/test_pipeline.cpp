@@ -324,6 +324,58 @@ TEST(Pipeline, TheBrickPlanCountsTheBlocksTheWindowsHold) {
     }
 }
 
+// What the plan holds whole (issue 41): a run that stops after its first pass (a closed mesh kept on its own faces)
+// holds one copy of the result's band while its windows run, not two, so its estimate is one copy lower (the closing
+// reinitialisation's two copies go with windows that hold less). A limit the band in floats does not fit gets it in
+// 16 bits there (BrickOptions::compact_band), with its estimate within the limit, and the kept mesh under it is the
+// whole run's within 0.05 voxel, its report saying so; a run of more passes is refused instead.
+TEST(Pipeline, TheBrickPlanHoldsWhatEachPassHolds) {
+    Mesh m = test::icosphere(1.0, 4);
+    for (std::size_t i = 0; i < m.positions.size(); ++i)  // deterministic radial noise of ±1.5%
+        m.positions[i] *= float(1.0 + 0.015 * std::sin(double(i) * 12.9898));
+    PipelineOptions o;
+    o.scan.resolution = 96;
+    o.connectivity = Connectivity::Keep;
+    o.brick_voxels = 24;
+    o.brick_halo_voxels = 16;
+    const double h = bounding_box(m).longest_side() / 96;
+    const BrickPlan two = plan_bricks(m, o, h, 16);
+    const BrickPlan one = plan_bricks(m, o, h, 16, nullptr, /*one_pass=*/true);
+    const double copy = two.band_blocks * 512 * 4;
+    EXPECT_FALSE(two.compact_band);
+    EXPECT_FALSE(one.compact_band);
+    EXPECT_NEAR(one.estimate_bytes, two.estimate_bytes - copy, 0.01 * copy);
+    // a limit below the floats' estimate: 16 bits, half a copy less, in a run of one pass only
+    PipelineOptions tight = o;
+    tight.max_memory_bytes = std::size_t(one.estimate_bytes - 0.3 * copy);
+    const BrickPlan compact = plan_bricks(m, tight, h, 16, nullptr, true);
+    EXPECT_TRUE(compact.compact_band);
+    EXPECT_EQ(compact.brick_voxels, 24);
+    EXPECT_LE(compact.estimate_bytes, double(tight.max_memory_bytes));
+    EXPECT_NEAR(compact.estimate_bytes, one.estimate_bytes - 0.5 * copy, 0.01 * copy);
+    EXPECT_THROW(plan_bricks(m, tight, h, 16), OutOfMemory);
+    // the kept mesh (a closed input: the engine's first pass only) under that limit, and without bricks
+    PipelineOptions free = o;
+    free.brick_voxels = 0;
+    const PipelineResult whole = smooth_mesh(m, free);
+    ASSERT_FALSE(whole.report.bricked);
+    ASSERT_TRUE(whole.report.connectivity_kept);
+    const PipelineResult r = smooth_mesh(m, tight);
+    ASSERT_TRUE(r.report.bricked);
+    EXPECT_TRUE(r.report.bricks.compact_band);
+    EXPECT_EQ(r.report.bricks.passes, 1);
+    EXPECT_LE(r.report.memory_estimate_bytes, double(tight.max_memory_bytes));
+    ASSERT_EQ(r.mesh.positions.size(), whole.mesh.positions.size());
+    double moved = 0;
+    for (std::size_t i = 0; i < r.mesh.positions.size(); ++i)
+        moved = std::max(moved, norm(Vec3d(r.mesh.positions[i]) - Vec3d(whole.mesh.positions[i])));
+    EXPECT_LT(moved, 0.05 * whole.report.scan.grid.voxel_size);
+    // a run of more passes (re-meshed) under the same limit is refused: floats do not fit, and 16 bits are for one
+    PipelineOptions remesh = tight;
+    remesh.connectivity = Connectivity::Remesh;
+    EXPECT_THROW((void)smooth_mesh(m, remesh), OutOfMemory);
+}
+
 TEST(Pipeline, MemoryLimitRefusesWithOutOfMemory) {
     PipelineOptions o = quick_options();
     o.scan.resolution = 2048;
