@@ -13,6 +13,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "core/band_memory.h"
 #include "core/errors.h"
 #include "core/mesh_report.h"
 #include "core/stopwatch.h"
@@ -480,8 +481,12 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
         plan.window_blocks = worst;
         const double passes =
             held(one_pass ? 1 : 2, compact) + kEngineRoundingBytes + worst * 512 * (kEngineBytesPerSample + 4);
-        const double closing = held(2, compact) + kEngineRoundingBytes + worst * 512 * kReinitialiseBytesPerSample;
-        return std::max(passes, closing);
+        // (the engine's untouched arrays cost no memory where it maps them in huge pages; elsewhere they are zeroed)
+        const double reinitialise = detail::maps_huge_pages() ? kReinitialiseBytesPerSample : kEngineBytesPerSample + 4;
+        const double closing = held(2, compact) + kEngineRoundingBytes + worst * 512 * reinitialise;
+        // the band handed back in floats while its 16 bits still live (and likewise for a checkpoint)
+        const double handed = compact ? held(1, false) + blocks.total * 512 * 2 : 0.0;
+        return std::max({passes, closing, handed});
     };
     // The band in floats at every size first (bricks hold the whole run's surface to float rounding), then, in a run of
     // one pass, in 16 bits: only the closing reinitialisation reads it back (within 0.001 voxel of the floats; a second
@@ -504,7 +509,7 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
         }
     throw OutOfMemory("this run needs about " + format_bytes(smallest) + " at voxel size " + std::to_string(h) +
                       (o.brick_voxels > 0 ? " in bricks of " : " even in bricks of ") + std::to_string(tried) +
-                      " voxels (" + format_bytes(held(one_pass ? 1 : 2, one_pass)) +
+                      " voxels (" + format_bytes(held(2, one_pass)) +
                       " of it the mesh and the result's band, held whole whatever the bricks), more than the " +
                       format_bytes(double(limit)) +
                       (o.max_memory_bytes == 0 ? " available" : " allowed by --max-memory") +
@@ -994,11 +999,17 @@ PipelineResult smooth_mesh(const Mesh& m, const PipelineOptions& o, Progress* pr
         if (!defects.empty()) {
             PipelineOptions remesh = o;
             remesh.connectivity = Connectivity::Remesh;
-            PipelineResult again = smooth_mesh(m, remesh, progress, bricks);
-            again.report.keep_declined = defects;
-            again.report.seconds.extract += r.seconds.total;
-            again.report.seconds.total += r.seconds.total;
-            return again;
+            try {
+                PipelineResult again = smooth_mesh(m, remesh, progress, bricks);
+                again.report.keep_declined = defects;
+                again.report.seconds.extract += r.seconds.total;
+                again.report.seconds.total += r.seconds.total;
+                return again;
+            } catch (const OutOfMemory& e) {
+                // a run planned for one pass (one copy of the band, or 16 bits) can fit where the re-meshed run of
+                // every pass does not: the kept result stays, with its defects said, rather than none after the work
+                r.warnings.push_back(defects + ", which re-meshing would remove, but " + e.what());
+            }
         }
     }
     // The scan conversion's note on an open mesh is about the volume: a result that keeps the input's openings

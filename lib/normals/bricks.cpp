@@ -57,9 +57,10 @@ struct Pass {
 };
 
 // The result's band as the run holds it between passes: a volume's blocks and tiles, their values in floats or
-// (BrickOptions::compact_band) in 16 bits over [−background, background], half the bytes, within 1/65534 of
-// the background (2·10⁻⁵ of a voxel at a band of 3 voxels). Its arrays are reserved for the blocks the run expects,
-// so that growing them never holds an old and a new copy at once.
+// (BrickOptions::compact_band) in 16 bits over [−background, background], half the bytes: a step of 2·background /
+// 65536 (2.4·10⁻⁴ voxel at the engine's band of 8 voxels), each value at the middle of its step, so that none is 0 and
+// every sign is kept. Its arrays are reserved for the blocks the run expects, so that growing them never holds an old
+// and a new copy at once.
 class HeldBand {
 public:
     void reset(const Grid& g, bool compact, std::size_t expected_blocks) {
@@ -91,8 +92,7 @@ public:
             q_.resize(q_.size() + kBlockVoxels);
         }
         std::int16_t* dst = q_.data() + std::size_t(slot) * kBlockVoxels;
-        const float to = float(kLevels) / bg;
-        for (int x = 0; x < kBlockVoxels; ++x) dst[x] = std::int16_t(std::lround(std::clamp(src[x], -bg, bg) * to));
+        for (int x = 0; x < kBlockVoxels; ++x) dst[x] = level(src[x], bg);
     }
     /// The 512 values of allocated block slot s.
     void read(std::int32_t s, float* dst) const {
@@ -100,9 +100,7 @@ public:
             std::copy_n(v_.values.data() + std::size_t(s) * kBlockVoxels, kBlockVoxels, dst);
             return;
         }
-        const std::int16_t* src = q_.data() + std::size_t(s) * kBlockVoxels;
-        const float from = v_.background / float(kLevels);
-        for (int x = 0; x < kBlockVoxels; ++x) dst[x] = float(src[x]) * from;
+        unpack(q_.data() + std::size_t(s) * kBlockVoxels, kBlockVoxels, v_.background, dst);
     }
     /// f(value) for every value of every allocated block, in order.
     template <class F>
@@ -111,8 +109,8 @@ public:
             for (const float x : v_.values) f(x);
             return;
         }
-        const float from = v_.background / float(kLevels);
-        for (const std::int16_t x : q_) f(float(x) * from);
+        const float step = 2.0f * v_.background / 65536.0f;
+        for (const std::int16_t x : q_) f((float(x) + 0.5f) * step);
     }
     /// Every value moved by d (world units), clamped to ±background.
     void shift(float d) {
@@ -121,26 +119,37 @@ public:
             for (float& x : v_.values) x = std::clamp(x + d, -bg, bg);
             return;
         }
-        const float from = bg / float(kLevels), to = float(kLevels) / bg;
-        for (std::int16_t& x : q_) x = std::int16_t(std::lround(std::clamp(float(x) * from + d, -bg, bg) * to));
+        const float step = 2.0f * bg / 65536.0f;
+        for (std::int16_t& x : q_) x = level((float(x) + 0.5f) * step + d, bg);
     }
-    /// As a volume of floats: the held one itself, or (compact) a copy.
+    /// As a volume of floats: the held one itself, or (compact) a copy (6 bytes a sample while both live).
     const Volume& volume(Volume& scratch) const {
         if (!compact_) return v_;
         scratch = v_;
         scratch.values.resize(v_.block_count() * kBlockVoxels);
-        for (std::size_t b = 0; b < v_.block_count(); ++b) read(std::int32_t(b), scratch.block_values(std::int32_t(b)));
+        unpack(q_.data(), q_.size(), v_.background, scratch.values.data());
         return scratch;
     }
     Volume take() && {
-        if (!compact_) return std::move(v_);
-        Volume out;
-        volume(out);
+        Volume out = std::move(v_);
+        if (compact_) {
+            out.values.resize(q_.size());
+            unpack(q_.data(), q_.size(), out.background, out.values.data());
+            q_ = {};
+        }
         return out;
     }
 
 private:
-    static constexpr int kLevels = 32767;
+    // x's step of the 65536 over [−bg, bg] (a NaN, which the engine does not leave, as the outside)
+    static std::int16_t level(float x, float bg) {
+        const float f = std::floor(std::clamp(x != x ? bg : x, -bg, bg) * (32768.0f / bg));
+        return std::int16_t(std::clamp(f, -32768.0f, 32767.0f));
+    }
+    static void unpack(const std::int16_t* q, std::size_t n, float bg, float* dst) {
+        const float step = 2.0f * bg / 65536.0f;
+        for (std::size_t x = 0; x < n; ++x) dst[x] = (float(q[x]) + 0.5f) * step;
+    }
     Volume v_;
     std::vector<std::int16_t> q_;
     bool compact_ = false;

@@ -30,11 +30,12 @@ struct BrickOptions {
     /// faster (fandisk_n0.3 at 256 in bricks of 128: 23.2 s and 226 MB against 26.4–27.0 s and 393 MB with 2 at
     /// once), so the pipeline keeps 1.
     int concurrent = 1;
-    /// The result's band held between passes in 16 bits per sample instead of a float (within 2·10⁻⁵ voxel at the
-    /// engine's band of 3 voxels), half of what the run holds whole besides a window. Meant for a run that stops after
-    /// its first pass (a checkpoint), where only the closing reinitialisation reads it back: within 10⁻³ voxel of the
-    /// floats (tests/normals/test_bricks.cpp). A second pass of the filters from it moved a test scene's surface by
-    /// 0.01 to 0.12 voxel (their choices amplify the change). plan_bricks asks for it where floats do not fit.
+    /// The result's band held between passes in 16 bits per sample instead of a float (a step of 2.4·10⁻⁴ voxel at
+    /// the engine's band of 8 voxels, every sign kept): half the bytes of the band, which the run holds whole besides a
+    /// window. Meant for a run that stops after its first pass (a checkpoint), where only the closing reinitialisation
+    /// reads it back: within 10⁻³ voxel of the floats (tests/normals/test_bricks.cpp). A second pass of the filters from
+    /// it moved a test scene's surface by 0.01 to 0.12 voxel (their choices amplify the change). plan_bricks asks for it
+    /// where floats do not fit such a run.
     bool compact_band = false;
     /// The blocks the result's band is expected to hold (plan_bricks's count; 0: unknown): its arrays are reserved for
     /// them, so that growing one never holds two copies at once.

@@ -19,6 +19,7 @@
 #include "metrics/surface_distance.h"
 #include "pipeline/report_json.h"
 #include "sdf/memory_estimate.h"
+#include "sdf/scan_convert.h"
 #include "sdf/sdf_test_meshes.h"
 #include "support/attributed_mesh.h"
 #include "support/test_files.h"
@@ -374,6 +375,31 @@ TEST(Pipeline, TheBrickPlanHoldsWhatEachPassHolds) {
     PipelineOptions remesh = tight;
     remesh.connectivity = Connectivity::Remesh;
     EXPECT_THROW((void)smooth_mesh(m, remesh), OutOfMemory);
+    // the band's reservation and the float copy handed back count too: never below the closing pass's two copies
+    const double mesh = estimate_memory(m, h, effective_scan_options(o).half_width).mesh_bytes;
+    EXPECT_GE(one.estimate_bytes, mesh + 2 * copy);
+    EXPECT_GE(compact.estimate_bytes, mesh + 1.5 * copy);
+#ifdef NORMALFLOW_TEST_HAS_CGAL  // the intersections are CGAL's to count
+    // Auto keeps a closed input and re-meshes it where its kept result intersects itself (two overlapping spheres):
+    // under a limit the kept run of one pass fits and the re-meshed run does not, the kept result stays, with a warning
+    const Mesh overlapping = test::concat(test::icosphere(1.0, 3), test::icosphere(1.0, 3, {0.8, 0.0, 0.0}));
+    PipelineOptions a;
+    a.scan.resolution = 64;
+    a.brick_voxels = 24;
+    a.brick_halo_voxels = 16;
+    const double ha = scan_grid(overlapping, effective_scan_options(a)).voxel_size;
+    const double kept_need = plan_bricks(overlapping, a, ha, 16, nullptr, true).estimate_bytes;
+    const double remesh_need = plan_bricks(overlapping, a, ha, 16).estimate_bytes;
+    ASSERT_LT(kept_need, remesh_need);
+    a.max_memory_bytes = std::size_t(0.5 * (kept_need + remesh_need));
+    const PipelineResult held = smooth_mesh(overlapping, a);
+    EXPECT_TRUE(held.report.connectivity_kept);
+    EXPECT_TRUE(held.report.bricked);
+    EXPECT_TRUE(held.report.keep_declined.empty());
+    EXPECT_TRUE(std::any_of(held.report.warnings.begin(), held.report.warnings.end(), [](const std::string& w) {
+        return w.find("re-meshing would remove") != std::string::npos;
+    })) << held.report.warnings.size();
+#endif
 }
 
 TEST(Pipeline, MemoryLimitRefusesWithOutOfMemory) {
