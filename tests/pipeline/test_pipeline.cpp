@@ -325,15 +325,21 @@ TEST(Pipeline, TheBrickPlanCountsTheBlocksTheWindowsHold) {
     }
 }
 
+/// A sphere (icosphere of level 4) with deterministic radial noise of ±1.5%.
+Mesh noisy_sphere() {
+    Mesh m = test::icosphere(1.0, 4);
+    for (std::size_t i = 0; i < m.positions.size(); ++i)
+        m.positions[i] *= float(1.0 + 0.015 * std::sin(double(i) * 12.9898));
+    return m;
+}
+
 // What the plan holds whole (issue 41): a run that stops after its first pass (a closed mesh kept on its own faces)
 // holds one copy of the result's band while its windows run, not two, so its estimate is one copy lower (the closing
 // reinitialisation's two copies go with windows that hold less). A limit the band in floats does not fit gets it in
 // 16 bits there (BrickOptions::compact_band), with its estimate within the limit, and the kept mesh under it is the
 // whole run's within 0.05 voxel, its report saying so; a run of more passes is refused instead.
 TEST(Pipeline, TheBrickPlanHoldsWhatEachPassHolds) {
-    Mesh m = test::icosphere(1.0, 4);
-    for (std::size_t i = 0; i < m.positions.size(); ++i)  // deterministic radial noise of ±1.5%
-        m.positions[i] *= float(1.0 + 0.015 * std::sin(double(i) * 12.9898));
+    const Mesh m = noisy_sphere();
     PipelineOptions o;
     o.scan.resolution = 96;
     o.connectivity = Connectivity::Keep;
@@ -422,9 +428,7 @@ TEST(Pipeline, MemoryLimitRefusesWithOutOfMemory) {
 // brick and the result is the whole run's surface within 0.05 voxel (sampled both ways), closed and manifold; a limit
 // that no brick size fits is refused.
 TEST(Pipeline, OverTheMemoryLimitTheEngineRunsInBricksAndGivesTheWholeRunsSurface) {
-    Mesh m = test::icosphere(1.0, 4);
-    for (std::size_t i = 0; i < m.positions.size(); ++i)  // deterministic radial noise of ±1.5%
-        m.positions[i] *= float(1.0 + 0.015 * std::sin(double(i) * 12.9898));
+    const Mesh m = noisy_sphere();
     PipelineOptions o;
     o.scan.resolution = 80;
     o.connectivity = Connectivity::Remesh;
