@@ -86,7 +86,6 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
         throw InvalidInput("filter_faces: " + std::to_string(held->size()) + " held flags for " +
                            std::to_string(m.positions.size()) + " positions");
     FaceFilterReport rep;
-    rep.salient = o.patch_guidance && o.saliency == PatchSaliency::On;
     std::vector<std::uint32_t> group;
     const std::size_t n = detail::weld(m, group);
     std::vector<Vec3d> x(n);
@@ -158,6 +157,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
     const Rows patch = build_rows(1);
     const Rows hood = o.rings == 1 ? patch : build_rows(o.rings);
     const bool salient = o.patch_guidance && o.saliency == PatchSaliency::On;
+    rep.salient = salient;
     // face → the face across each of its edges (none where the edge is not shared by exactly two), for the saliency
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::array<std::uint32_t, 3>> across(salient ? nf : 0, {kNone, kNone, kNone});
