@@ -123,7 +123,7 @@ double check_memory(const Mesh& mesh, const PipelineOptions& o) {
     const double longest = bounding_box(mesh).longest_side();
     const double h = s.voxel_size > 0 ? s.voxel_size : longest / s.resolution;
     if (!(h > 0) || !std::isfinite(h)) return 0;
-    const MemoryEstimate e = estimate_memory(mesh, h, s.half_width);
+    const MemoryEstimate e = estimate_memory(mesh, h, s.half_width, s.shell_thickness == 0);
     const double need = e.total(o.smoothing);
     const std::size_t limit = o.max_memory_bytes > 0 ? o.max_memory_bytes : available_memory_bytes();
     if (limit > 0 && need > double(limit))
@@ -294,31 +294,6 @@ struct BlockCounts {
     }
 };
 
-/// The caps over m's holes: for each run of boundary edges (edges of one triangle; runs joined where they share a
-/// vertex), the triangles from the run's centroid to each of its edges, in grid indices.
-std::vector<std::array<Vec3d, 3>> hole_caps(const Mesh& m, const Grid& g) {
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
-    for (const std::uint64_t e : single_face_edges(m.triangles))
-        boundary.emplace_back(std::uint32_t(e >> 32), std::uint32_t(e));
-    std::vector<std::array<Vec3d, 3>> caps;
-    if (boundary.empty()) return caps;
-    detail::UnionFind<std::uint32_t> runs(m.positions.size());
-    for (const auto& [u, v] : boundary) runs.unite(u, v);
-    // by the run's root: the sum of its edges' ends, and their number
-    std::vector<Vec3d> sum(m.positions.size(), Vec3d(0, 0, 0));
-    std::vector<double> count(m.positions.size(), 0.0);
-    for (const auto& [u, v] : boundary) {
-        const std::uint32_t r = runs.find(u);
-        sum[r] += Vec3d(m.positions[u]) + Vec3d(m.positions[v]);
-        count[r] += 2;
-    }
-    for (const auto& [u, v] : boundary) {
-        const std::uint32_t r = runs.find(u);
-        caps.push_back({g.index(sum[r] / count[r]), g.index(Vec3d(m.positions[u])), g.index(Vec3d(m.positions[v]))});
-    }
-    return caps;
-}
-
 BlockCounts count_blocks(const Mesh& m, const Grid& g, double shell_thickness) {
     BlockCounts c;
     for (int d = 0; d < 3; ++d) c.blocks[d] = std::max(1, (g.dims[d] + kBlockDim - 1) / kBlockDim);
@@ -374,8 +349,8 @@ BlockCounts count_blocks(const Mesh& m, const Grid& g, double shell_thickness) {
         mark_triangle(p);
     }
     if (shell_thickness == 0)
-        for (const auto& cap : hole_caps(m, g)) {
-            const Vec3d p[3] = {cap[0], cap[1], cap[2]};
+        for (const auto& cap : hole_caps(m)) {
+            const Vec3d p[3] = {g.index(cap[0]), g.index(cap[1]), g.index(cap[2])};
             mark_triangle(p);
         }
     // the 26 neighbours: grown by a block along x (bits, across words), then y, then z
@@ -445,7 +420,7 @@ BrickPlan plan_bricks(const Mesh& m, const PipelineOptions& o, double h, int hal
                       bool one_pass) {
     BrickPlan plan;
     const ScanConvertOptions s = effective_scan_options(o);
-    const MemoryEstimate e = estimate_memory(m, h, s.half_width);
+    const MemoryEstimate e = estimate_memory(m, h, s.half_width, s.shell_thickness == 0);
     if (o.brick_voxels == 0) {
         try {
             plan.estimate_bytes = check_memory(m, o);

@@ -97,6 +97,30 @@ std::vector<std::uint64_t> single_face_edges(const std::vector<Tri>& tris) {
     return once;
 }
 
+std::vector<std::array<Vec3d, 3>> hole_caps(const Mesh& m) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
+    for (const std::uint64_t e : single_face_edges(m.triangles))
+        boundary.emplace_back(std::uint32_t(e >> 32), std::uint32_t(e));
+    std::vector<std::array<Vec3d, 3>> caps;
+    if (boundary.empty()) return caps;
+    detail::UnionFind<std::uint32_t> runs(m.positions.size());
+    for (const auto& [u, v] : boundary) runs.unite(u, v);
+    // by the run's root: the sum of its edges' ends, and their number
+    std::vector<Vec3d> sum(m.positions.size(), Vec3d(0, 0, 0));
+    std::vector<double> count(m.positions.size(), 0.0);
+    for (const auto& [u, v] : boundary) {
+        const std::uint32_t r = runs.find(u);
+        sum[r] += Vec3d(m.positions[u]) + Vec3d(m.positions[v]);
+        count[r] += 2;
+    }
+    caps.reserve(boundary.size());
+    for (const auto& [u, v] : boundary) {
+        const std::uint32_t r = runs.find(u);
+        caps.push_back({sum[r] / count[r], Vec3d(m.positions[u]), Vec3d(m.positions[v])});
+    }
+    return caps;
+}
+
 std::vector<std::uint32_t> face_components(const Mesh& m, const std::vector<char>* only, std::size_t* count) {
     const auto in = [&](std::size_t f) { return !only || (*only)[f] != 0; };
     detail::UnionFind<std::uint32_t> uf(m.positions.size());

@@ -121,6 +121,11 @@ inline std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
 /// indices (degenerate edges {a, a} skipped).
 std::vector<std::uint64_t> single_face_edges(const std::vector<Tri>& tris);
 
+/// The caps over m's holes, which a volume scanned from m closes (its winding number changes across them): for each
+/// run of boundary edges (edges of one triangle; runs joined where they share a vertex), the triangles from the run's
+/// centroid to each of its edges. A fan, not a minimal surface: its area is at least the hole's. Cost: O(F log F).
+std::vector<std::array<Vec3d, 3>> hole_caps(const Mesh& m);
+
 /// Bounding box of all positions of m.
 inline Box3d bounding_box(const Mesh& m) {
     Box3d b;
