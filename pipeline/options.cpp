@@ -294,6 +294,11 @@ std::vector<OptionSpec> make_table() {
                     "keep: a patch's consistency includes its relative saliency (Zhang et al.): on, off, or chosen, "
                     "both run and the one of lower estimated error kept"),
                 names({PatchSaliency::Off, PatchSaliency::On, PatchSaliency::Chosen})),
+        choices(row("face-range", "pipeline.faces.range", G::OutputMesh, T::Library, S,
+                    [](RunOptions& o) -> auto& { return o.pipeline.faces.range; },
+                    "keep: the face filter's weight on the guidance normals: guided, none (a linear mean), or "
+                    "chosen, both run and the one of lower estimated error kept"),
+                names({RangeWeight::Guided, RangeWeight::None, RangeWeight::Chosen})),
         range(row("face-own-patch", "pipeline.faces.own_patch_bias", G::OutputMesh, T::Library, S,
                   [](RunOptions& o) -> auto& { return o.pipeline.faces.own_patch_bias; },
                   "keep: a neighbour's patch guides a face when its spread is below this fraction of the face's own"),

@@ -214,6 +214,7 @@ Json to_json(const PipelineReport& r) {
                                  .set("rounds_run", r.faces.rounds_run)
                                  .set("blend", r.faces.blend)
                                  .set("salient", r.faces.salient)
+                                 .set("guided", r.faces.guided)
                                  .set("estimated_error", r.faces.estimated_error)
                                  .set("rms_displacement", r.faces.rms_displacement)
                                  .set("reverted_moves", r.faces.reverted_moves)

@@ -47,6 +47,15 @@ const char* to_string(PatchSaliency s) {
     return "?";
 }
 
+const char* to_string(RangeWeight r) {
+    switch (r) {
+        case RangeWeight::Guided: return "guided";
+        case RangeWeight::None: return "none";
+        case RangeWeight::Chosen: return "chosen";
+    }
+    return "?";
+}
+
 FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::vector<Vec3d>* guidance,
                               const std::vector<char>* held, std::vector<Vec3d>* filtered_normals) {
     if (o.normal_steps < 0 || o.vertex_steps < 0 || o.rings < 1 || !(o.sigma_r > 0) || !(o.sigma_s > 0) ||
@@ -57,6 +66,24 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             "filter_faces: normal_steps and vertex_steps must be >= 0, rings >= 1, sigma_r and sigma_s finite and > 0, "
             "own_patch_bias in (0, 1], stop_displacement and stop_noise finite and >= 0, not both > 0");
     check_mesh(m, "filter_faces");
+    if (o.range == RangeWeight::Chosen) {
+        // The weight on the guidance and none, and the one whose rounds the risk estimate finds of least error
+        FaceFilterOptions guided = o, none = o;
+        guided.range = RangeWeight::Guided;
+        none.range = RangeWeight::None;
+        if (!(o.stop_noise > 0)) return filter_faces(m, guided, guidance, held, filtered_normals);
+        Mesh plain = m;
+        std::vector<Vec3d> normals_none;
+        FaceFilterReport rep_none =
+            filter_faces(plain, none, guidance, held, filtered_normals ? &normals_none : nullptr);
+        FaceFilterReport rep_guided = filter_faces(m, guided, guidance, held, filtered_normals);
+        if (rep_none.estimated_error < rep_guided.estimated_error) {
+            m.positions = std::move(plain.positions);
+            if (filtered_normals) *filtered_normals = std::move(normals_none);
+            return rep_none;
+        }
+        return rep_guided;
+    }
     if (o.saliency == PatchSaliency::Chosen) {
         // Both measures of a patch's consistency, and the one whose rounds the risk estimate finds of least error
         if (!(o.stop_noise > 0) || !o.patch_guidance) {
@@ -156,8 +183,10 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
     };
     const Rows patch = build_rows(1);
     const Rows hood = o.rings == 1 ? patch : build_rows(o.rings);
-    const bool salient = o.patch_guidance && o.saliency == PatchSaliency::On;
+    const bool weighed = o.range != RangeWeight::None;  // the guidance's weight (Chosen was resolved above)
+    const bool salient = weighed && o.patch_guidance && o.saliency == PatchSaliency::On;
     rep.salient = salient;
+    rep.guided = weighed;
     // face → the face across each of its edges (none where the edge is not shared by exactly two), for the saliency
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::array<std::uint32_t, 3>> across(salient ? nf : 0, {kNone, kNone, kNone});
@@ -247,7 +276,9 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             st.base[f] = st.normal[f];
             if (guidance && norm((*guidance)[f]) > 0.5) st.base[f] = (*guidance)[f];
         });
-        if (o.patch_guidance) {
+        if (!weighed) {
+            // no weight reads the guidance: none is built
+        } else if (o.patch_guidance) {
             // each face's patch: its area-weighted mean base normal and its spread (the largest distance from it);
             // infinite where the mean has no direction
             parallel(nf, [&](std::size_t j) {
@@ -304,8 +335,12 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             Vec3d sum(0, 0, 0);
             for (const std::uint32_t* k = hood.begin(f); k != hood.end(f); ++k) {
                 const Vec3d d = st.centre[*k] - st.centre[f];
-                const Vec3d g = st.guide[*k] - st.guide[f];
-                sum = sum + st.normal[*k] * (st.area[*k] * std::exp(-dot(d, d) * inv_s - dot(g, g) * inv_r));
+                double range = 0.0;
+                if (weighed) {
+                    const Vec3d g = st.guide[*k] - st.guide[f];
+                    range = dot(g, g) * inv_r;
+                }
+                sum = sum + st.normal[*k] * (st.area[*k] * std::exp(-dot(d, d) * inv_s - range));
             }
             const double len = norm(sum);
             st.filtered[f] = len > 0 ? sum / len : st.normal[f];

@@ -24,6 +24,16 @@ enum class PatchSaliency {
 /// "off", "on", "chosen".
 const char* to_string(PatchSaliency s);
 
+/// The filter's weight on the guidance (FaceFilterOptions::range).
+enum class RangeWeight {
+    Guided,  ///< the joint bilateral weight on the guidance normals: a crease stays sharp
+    None,    ///< none: a mean over the neighbourhood weighted by area and distance alone, a linear low-pass
+    Chosen,  ///< with stop_noise, both run and the one of the lower risk estimate is kept; otherwise Guided
+};
+
+/// "guided", "none", "chosen".
+const char* to_string(RangeWeight r);
+
 /// Options for filter_faces.
 struct FaceFilterOptions {
     int normal_steps = 1;   ///< >= 0: rounds of guidance, joint bilateral filter and vertex update; 0: none
@@ -59,6 +69,14 @@ struct FaceFilterOptions {
     /// 0.25°) and costs the smooth ones (sharpsphere 0.23°), and Chosen, whose estimate picks On on sharpsphere and
     /// igea too, keeps both trades (docs/history/benchmarks-2026.md, "The patch's saliency").
     PatchSaliency saliency = PatchSaliency::Off;
+    /// The weight on the guidance, or none. A weight on the guidance keeps a crease and lets the filter tell it from
+    /// noise; where the surface has no crease but relief as fine as the noise (a statue's), it snaps that relief
+    /// into facets, and a mean without it keeps the relief as a low-pass filter does. Chosen runs the rounds both
+    /// ways and keeps the one of lower estimated error (the risk stop's, so only with stop_noise; otherwise Guided),
+    /// at about twice the filter's cost: in the study it takes the mean on julius_n0.2, fertility_n3 and vaselion_n3
+    /// (sampled 4.76° → 4.71°, 4.19° → 4.19°, 10.99° → 10.58°, where Taubin's best reaches 10.66°) and the weight on
+    /// every part (docs/history/benchmarks-2026.md, "The face filter's weight on the guidance, or none").
+    RangeWeight range = RangeWeight::Chosen;
     /// World units, >= 0. > 0: the rounds stop once the vertices' root-mean-square distance from where
     /// they started reaches this length (normal_steps is then the most rounds). Given the input's noise
     /// (estimate_noise), this is Morozov's discrepancy principle: remove as much as the noise, no more.
@@ -99,6 +117,7 @@ struct FaceFilterReport {
     /// other round's share; 0: the least round itself
     double blend = 0;
     bool salient = false;         ///< the patches' consistency included their saliency (PatchSaliency)
+    bool guided = true;           ///< the filter weighed the guidance (RangeWeight::Guided), or not (None)
     double estimated_error = 0;   ///< with stop_noise: the risk estimate's RMS error of the kept vertices, world units
     double rms_displacement = 0;  ///< world units: the vertices' root-mean-square distance from where they began
 };

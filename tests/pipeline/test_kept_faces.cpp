@@ -371,6 +371,9 @@ TEST(KeptFaces, TheRiskEstimateNotTheBoundEndsAPartsRounds) {
     const std::string json = to_json(free.report).dump();  // the report gives the rounds and the blend
     EXPECT_NE(json.find("\"face_filter\":{"), std::string::npos);
     EXPECT_NE(json.find("\"blend\":"), std::string::npos);
+    // a part's creases: the risk estimate keeps the weight on the guidance (RangeWeight::Chosen), and says so
+    EXPECT_TRUE(free.report.faces.guided);
+    EXPECT_NE(json.find("\"guided\":true"), std::string::npos);
     o.faces.normal_steps = 30;
     const PipelineResult cut = smooth_mesh(noisy, o);
     EXPECT_EQ(cut.report.faces.rounds_run, 30);
