@@ -47,6 +47,25 @@ const char* to_string(PatchSaliency s) {
     return "?";
 }
 
+namespace {
+
+/// The rounds run with options a (on a copy of m) and with b (on m), and the run of the lower risk estimate kept: m,
+/// the filtered normals and the report are its (b's where the two are equal).
+FaceFilterReport keep_lower_risk(Mesh& m, const FaceFilterOptions& a, const FaceFilterOptions& b,
+                                 const std::vector<Vec3d>* guidance, const std::vector<char>* held,
+                                 std::vector<Vec3d>* filtered_normals) {
+    Mesh copy = m;
+    std::vector<Vec3d> normals_a;
+    const FaceFilterReport rep_a = filter_faces(copy, a, guidance, held, filtered_normals ? &normals_a : nullptr);
+    const FaceFilterReport rep_b = filter_faces(m, b, guidance, held, filtered_normals);
+    if (!(rep_a.estimated_error < rep_b.estimated_error)) return rep_b;
+    m.positions = std::move(copy.positions);
+    if (filtered_normals) *filtered_normals = std::move(normals_a);
+    return rep_a;
+}
+
+}  // namespace
+
 const char* to_string(RangeWeight r) {
     switch (r) {
         case RangeWeight::Guided: return "guided";
@@ -72,17 +91,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
         guided.range = RangeWeight::Guided;
         none.range = RangeWeight::None;
         if (!(o.stop_noise > 0)) return filter_faces(m, guided, guidance, held, filtered_normals);
-        Mesh plain = m;
-        std::vector<Vec3d> normals_none;
-        FaceFilterReport rep_none =
-            filter_faces(plain, none, guidance, held, filtered_normals ? &normals_none : nullptr);
-        FaceFilterReport rep_guided = filter_faces(m, guided, guidance, held, filtered_normals);
-        if (rep_none.estimated_error < rep_guided.estimated_error) {
-            m.positions = std::move(plain.positions);
-            if (filtered_normals) *filtered_normals = std::move(normals_none);
-            return rep_none;
-        }
-        return rep_guided;
+        return keep_lower_risk(m, none, guided, guidance, held, filtered_normals);
     }
     if (o.saliency == PatchSaliency::Chosen) {
         // Both measures of a patch's consistency, and the one whose rounds the risk estimate finds of least error
@@ -91,19 +100,10 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             plain.saliency = PatchSaliency::Off;
             return filter_faces(m, plain, guidance, held, filtered_normals);
         }
-        Mesh with = m;
         FaceFilterOptions off = o, on = o;
         off.saliency = PatchSaliency::Off;
         on.saliency = PatchSaliency::On;
-        std::vector<Vec3d> normals_on;
-        FaceFilterReport rep_on = filter_faces(with, on, guidance, held, filtered_normals ? &normals_on : nullptr);
-        FaceFilterReport rep_off = filter_faces(m, off, guidance, held, filtered_normals);
-        if (rep_on.estimated_error < rep_off.estimated_error) {
-            m.positions = std::move(with.positions);
-            if (filtered_normals) *filtered_normals = std::move(normals_on);
-            return rep_on;
-        }
-        return rep_off;
+        return keep_lower_risk(m, on, off, guidance, held, filtered_normals);
     }
     const std::size_t nf = m.triangles.size();
     if (guidance && guidance->size() != nf)
