@@ -330,6 +330,29 @@ TEST(FaceFilter, TheRiskStopKeepsTheRoundOfLeastError) {
     EXPECT_EQ(same.positions, input.positions);
 }
 
+/// The three runs of a chosen option: its setting a, b, and chosen (set(o, 0), set(o, 1), set(o, 2)), each on a copy
+/// of noisy; the chosen run must be the one of the lower risk estimate (b's on a tie), mesh, rounds and estimate.
+struct ChosenRuns {
+    Mesh a, b, chosen;
+    FaceFilterReport rep_a, rep_b, rep;
+    bool prefer_a = false;
+};
+template <class Set>
+ChosenRuns run_chosen(const Mesh& noisy, FaceFilterOptions o, Set set) {
+    ChosenRuns c{noisy, noisy, noisy, {}, {}, {}, false};
+    set(o, 0);
+    c.rep_a = filter_faces(c.a, o);
+    set(o, 1);
+    c.rep_b = filter_faces(c.b, o);
+    set(o, 2);
+    c.rep = filter_faces(c.chosen, o);
+    c.prefer_a = c.rep_a.estimated_error < c.rep_b.estimated_error;
+    EXPECT_EQ(c.chosen.positions, c.prefer_a ? c.a.positions : c.b.positions);
+    EXPECT_EQ(c.rep.rounds, c.prefer_a ? c.rep_a.rounds : c.rep_b.rounds);
+    EXPECT_EQ(c.rep.estimated_error, std::min(c.rep_a.estimated_error, c.rep_b.estimated_error));
+    return c;
+}
+
 TEST(FaceFilter, TheSaliencyKeepsTheGuidanceOffCreasesAndTheRiskEstimateChoosesIt) {
     // Heavy noise on a cube: a vertex ring that straddles an edge of the cube is hardly less spread than one on a
     // side, so the guidance without the saliency blends the sides at many faces beside the edges. The saliency
@@ -350,20 +373,16 @@ TEST(FaceFilter, TheSaliencyKeepsTheGuidanceOffCreasesAndTheRiskEstimateChoosesI
         o.normal_steps = 40;
         o.stop_noise = estimate_noise(noisy, NoiseNormals::Steady).sigma;
         o.range = RangeWeight::Guided;  // the saliency is the guidance's
-        Mesh off = noisy, on = noisy, chosen = noisy;
-        o.saliency = PatchSaliency::Off;
-        const FaceFilterReport r_off = filter_faces(off, o);
-        o.saliency = PatchSaliency::On;
-        const FaceFilterReport r_on = filter_faces(on, o);
+        const ChosenRuns runs = run_chosen(noisy, o, [](FaceFilterOptions& x, int k) {
+            x.saliency = k == 0 ? PatchSaliency::On : k == 1 ? PatchSaliency::Off : PatchSaliency::Chosen;
+        });
+        const Mesh &on = runs.a, &off = runs.b, &chosen = runs.chosen;
+        const FaceFilterReport &r_on = runs.rep_a, &r_off = runs.rep_b, &r = runs.rep;
         o.saliency = PatchSaliency::Chosen;
-        const FaceFilterReport r = filter_faces(chosen, o);
         EXPECT_FALSE(r_off.salient);
         EXPECT_TRUE(r_on.salient);
-        const bool prefer_on = r_on.estimated_error < r_off.estimated_error;
+        const bool prefer_on = runs.prefer_a;
         EXPECT_EQ(r.salient, prefer_on);
-        EXPECT_EQ(chosen.positions, prefer_on ? on.positions : off.positions);
-        EXPECT_EQ(r.rounds, prefer_on ? r_on.rounds : r_off.rounds);
-        EXPECT_EQ(r.estimated_error, std::min(r_on.estimated_error, r_off.estimated_error));
         const double a_off = mean_face_angle(off, c.clean), a_on = mean_face_angle(on, c.clean);
         // the faces beside the cube's edges: a corner on an edge (two coordinates at ±1)
         double edge_off = 0, edge_on = 0;
@@ -442,20 +461,16 @@ TEST(FaceFilter, WithoutCreasesTheRiskEstimateTakesTheMeanWithoutTheGuidance) {
         FaceFilterOptions o;
         o.normal_steps = 40;
         o.stop_noise = estimate_noise(noisy, NoiseNormals::Steady).sigma;
-        Mesh guided = noisy, none = noisy, chosen = noisy;
-        o.range = RangeWeight::Guided;
-        const FaceFilterReport r_guided = filter_faces(guided, o);
-        o.range = RangeWeight::None;
-        const FaceFilterReport r_none = filter_faces(none, o);
+        const ChosenRuns runs = run_chosen(noisy, o, [](FaceFilterOptions& x, int k) {
+            x.range = k == 0 ? RangeWeight::None : k == 1 ? RangeWeight::Guided : RangeWeight::Chosen;
+        });
+        const Mesh &none = runs.a, &guided = runs.b, &chosen = runs.chosen;
+        const FaceFilterReport &r_none = runs.rep_a, &r_guided = runs.rep_b, &r = runs.rep;
         o.range = RangeWeight::Chosen;
-        const FaceFilterReport r = filter_faces(chosen, o);
         EXPECT_TRUE(r_guided.guided);
         EXPECT_FALSE(r_none.guided);
-        const bool prefer_none = r_none.estimated_error < r_guided.estimated_error;
+        const bool prefer_none = runs.prefer_a;
         EXPECT_EQ(r.guided, !prefer_none);
-        EXPECT_EQ(chosen.positions, prefer_none ? none.positions : guided.positions);
-        EXPECT_EQ(r.rounds, prefer_none ? r_none.rounds : r_guided.rounds);
-        EXPECT_EQ(r.estimated_error, std::min(r_none.estimated_error, r_guided.estimated_error));
         const double a_guided = mean_face_angle(guided, c.clean), a_none = mean_face_angle(none, c.clean);
         const double e_guided = rms_error(guided, c.clean), e_none = rms_error(none, c.clean);
         std::printf(
