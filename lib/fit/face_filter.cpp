@@ -95,7 +95,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
     }
     if (o.saliency == PatchSaliency::Chosen) {
         // Both measures of a patch's consistency, and the one whose rounds the risk estimate finds of least error
-        if (!(o.stop_noise > 0) || !o.patch_guidance) {
+        if (!(o.stop_noise > 0) || !o.patch_guidance || o.range == RangeWeight::None) {  // no patch to measure
             FaceFilterOptions plain = o;
             plain.saliency = PatchSaliency::Off;
             return filter_faces(m, plain, guidance, held, filtered_normals);
