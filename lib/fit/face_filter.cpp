@@ -276,9 +276,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
             st.base[f] = st.normal[f];
             if (guidance && norm((*guidance)[f]) > 0.5) st.base[f] = (*guidance)[f];
         });
-        if (!weighed) {
-            // no weight reads the guidance: none is built
-        } else if (o.patch_guidance) {
+        if (weighed && o.patch_guidance) {  // (without the weight nothing reads the guidance: none is built)
             // each face's patch: its area-weighted mean base normal and its spread (the largest distance from it);
             // infinite where the mean has no direction
             parallel(nf, [&](std::size_t j) {
@@ -326,7 +324,7 @@ FaceFilterReport filter_faces(Mesh& m, const FaceFilterOptions& o, const std::ve
                     }
                 st.guide[f] = chosen;
             });
-        } else {
+        } else if (weighed) {
             st.guide = st.base;
         }
         // joint bilateral filter of the normals

@@ -109,8 +109,8 @@ public:
             for (const float x : v_.values) f(x);
             return;
         }
-        const float step = 2.0f * v_.background / 65536.0f;
-        for (const std::int16_t x : q_) f((float(x) + 0.5f) * step);
+        const float step = step_of(v_.background);
+        for (const std::int16_t x : q_) f(value(x, step));
     }
     /// Every value moved by d (world units), clamped to ±background.
     void shift(float d) {
@@ -119,8 +119,8 @@ public:
             for (float& x : v_.values) x = std::clamp(x + d, -bg, bg);
             return;
         }
-        const float step = 2.0f * bg / 65536.0f;
-        for (std::int16_t& x : q_) x = level((float(x) + 0.5f) * step + d, bg);
+        const float step = step_of(bg);
+        for (std::int16_t& x : q_) x = level(value(x, step) + d, bg);
     }
     /// As a volume of floats: the held one itself, or (compact) a copy (6 bytes a sample while both live).
     const Volume& volume(Volume& scratch) const {
@@ -146,9 +146,12 @@ private:
         const float f = std::floor(std::clamp(x != x ? bg : x, -bg, bg) * (32768.0f / bg));
         return std::int16_t(std::clamp(f, -32768.0f, 32767.0f));
     }
+    // the width of a step over [−bg, bg], and the value of level q: the middle of its step
+    static float step_of(float bg) { return 2.0f * bg / 65536.0f; }
+    static float value(std::int16_t q, float step) { return (float(q) + 0.5f) * step; }
     static void unpack(const std::int16_t* q, std::size_t n, float bg, float* dst) {
-        const float step = 2.0f * bg / 65536.0f;
-        for (std::size_t x = 0; x < n; ++x) dst[x] = (float(q[x]) + 0.5f) * step;
+        const float step = step_of(bg);
+        for (std::size_t x = 0; x < n; ++x) dst[x] = value(q[x], step);
     }
     Volume v_;
     std::vector<std::int16_t> q_;
