@@ -190,6 +190,7 @@ Json to_json(const PipelineReport& r) {
                             .set("seconds_smooth", b.seconds_smooth)
                             .set("refit_passes_redone", b.refit_passes_redone)
                             .set("refit_passes_windowed", b.refit_passes_windowed)
+                            .set("refit_explicit_tails", b.refit_explicit_tails)
                             .set("compact_band", b.compact_band)
                             .set("ran", b.elsewhere ? "elsewhere" : "here"));
     }

@@ -53,7 +53,8 @@ struct Pass {
     bool any = false;                  // some brick's engine ran
     bool moved = false;                // some brick's refit kept a step
     std::vector<double> refit_energy;  // the whole surface's D where the refit checks it: the bricks' interiors' summed
-    bool refit_energy_aligned = true;  // every brick checked D as often (none restarted its refit)
+    bool refit_energy_aligned = true;  // every brick checked D as often (none restarted its refit, none of its
+                                       // explicit steps ran away); else refit_energy sums the steps all took
 };
 
 // The result's band as the run holds it between passes: a volume's blocks and tiles, their values in floats or
@@ -324,7 +325,12 @@ Pass run_pass(const BrickContext& c, const BrickRunner& runner, int brick_blocks
             result.volume_slope += it.volume_slope;
             result.moved |= it.refit_steps > 0 || !is_neighbourhood_filter(c.engine.mode);
             if (!result.any) result.refit_energy.assign(it.refit_window_energy.size(), 0.0);
-            if (it.refit_window_energy.size() != result.refit_energy.size()) result.refit_energy_aligned = false;
+            // bricks that checked D a different number of times: the sums over the steps they all took
+            if (it.refit_window_energy.size() != result.refit_energy.size()) {
+                result.refit_energy_aligned = false;
+                if (it.refit_window_energy.size() < result.refit_energy.size())
+                    result.refit_energy.resize(it.refit_window_energy.size());
+            }
             for (std::size_t e = 0; e < std::min(result.refit_energy.size(), it.refit_window_energy.size()); ++e)
                 result.refit_energy[e] += it.refit_window_energy[e];
             result.any = true;
@@ -427,6 +433,8 @@ BrickOutcome run_brick(const BrickContext& c, BrickJob job) {
         brick.refit_whole_time = job.refit.whole_time;
         brick.refit_replay_count = job.refit.replay_count;
         brick.refit_replay = job.refit.replay;
+        brick.refit_explicit_probe = job.refit.explicit_probe;
+        brick.refit_explicit_replay = job.refit.explicit_replay;
         const std::array<int, 3> gbd{(c.grid.dims[0] + kBlockDim - 1) / kBlockDim,
                                      (c.grid.dims[1] + kBlockDim - 1) / kBlockDim,
                                      (c.grid.dims[2] + kBlockDim - 1) / kBlockDim};
@@ -580,31 +588,75 @@ Volume smooth_in_bricks(const Mesh& m, const ClosestTriangleQuery& q, const Wind
         };
         checked_pass();
         double left = refit_time(context.engine);
+        const double dt = refit_step_dt(context.engine);
+        const auto redo = [&] {
+            fresh();
+            ++rep.refit_passes_redone;
+            checked_pass();
+        };
+        const auto windowed = [&] {
+            refit = BrickRefit{.whole_time = false};
+            fresh();
+            ++rep.refit_passes_redone;
+            p = pass();
+            ++rep.refit_passes_windowed;
+            add_new(sr.warnings,
+                    {"iteration " + std::to_string(it + 1) +
+                     ": the whole surface's refit could not be followed in bricks; each brick decided in its "
+                     "window (the result may differ from the whole run's by a few tenths of a voxel)"});
+        };
         while (checked_refit && (failed || p.any)) {
             using Then = SuperStepDecision::Then;
             const SuperStepDecision d = !failed && p.refit_energy_aligned
                                             ? decide_super_steps(p.refit_energy, context.engine, left)
                                             : SuperStepDecision{};
             if (d.then == Then::KeepAll) break;
-            const bool replayable = d.then == Then::Stop || (d.then == Then::Restart && d.time_kept > 0.0 &&
-                                                             refit.replay_count + 1 < kRefitSuperStepAttempts);
-            fresh();
-            ++rep.refit_passes_redone;
-            if (!replayable) {
-                refit = BrickRefit{.whole_time = false};
-                p = pass();
-                ++rep.refit_passes_windowed;
-                add_new(sr.warnings,
-                        {"iteration " + std::to_string(it + 1) +
-                         ": the whole surface's refit could not be followed in bricks; each brick decided in its "
-                         "window (the result may differ from the whole run's by a few tenths of a voxel)"});
+            if (!(d.then == Then::Stop || (d.then == Then::Restart && refit.replay_count < kRefitSuperStepAttempts))) {
+                windowed();
                 break;
             }
             refit.replay[std::size_t(refit.replay_count++)] = d.then == Then::Stop ? -d.kept - 1 : d.kept;
-            checked_pass();
             left -= d.time_kept;
+            // After the last restart, or one from the first super step, the whole run goes on in explicit steps
+            // until its patient stop: every brick runs some of them, each step's D in its record, and the stop is
+            // decided on the sum (a longer probe where it is not within them) and replayed.
+            const bool explicit_steps = d.then == Then::Restart && left > 0.5 * dt &&
+                                        (refit.replay_count == kRefitSuperStepAttempts || !(d.time_kept > 0.0));
+            const int rest = std::max(int(std::lround(left / dt)), 1);
+            if (explicit_steps) refit.explicit_probe = std::min(4 * refit_explicit_patience(context.engine), rest);
+            redo();
             // the refit ends with the decision replayed: nothing after it to check
-            if (d.then == Then::Stop || !(left > 0.5 * refit_step_dt(context.engine))) break;
+            if (!explicit_steps) {
+                if (d.then == Then::Stop || !(left > 0.5 * dt)) break;
+                continue;
+            }
+            ++rep.refit_explicit_tails;
+            for (;;) {
+                using Next = ExplicitStepDecision::Then;
+                // where a brick's steps ran away (φ not finite), the decision only if it falls before
+                ExplicitStepDecision e =
+                    !failed ? decide_explicit_steps(p.refit_energy, context.engine, rest) : ExplicitStepDecision{};
+                if (!p.refit_energy_aligned && !(e.then == Next::Keep && e.steps < int(p.refit_energy.size()) - 1))
+                    e = ExplicitStepDecision{};
+                if (e.then == Next::Unknown) {
+                    windowed();
+                    break;
+                }
+                if (e.then == Next::Longer) {
+                    refit.explicit_probe = std::min(2 * refit.explicit_probe, rest);
+                    redo();
+                    continue;
+                }
+                // the probe kept every step it ran; where the stop keeps fewer, they are replayed
+                if (e.steps < int(p.refit_energy.size()) - 1) {
+                    refit.explicit_probe = 0;
+                    refit.explicit_replay = e.steps;
+                    redo();
+                    if (failed) windowed();
+                }
+                break;
+            }
+            break;
         }
         ++rep.passes;
         add_new(sr.warnings, p.warnings);
@@ -818,6 +870,8 @@ void job_fields(IO& io, Job& job) {
     io.field(job.refit.whole_time);
     io.field(job.refit.replay_count);
     io.field(job.refit.replay);
+    io.field(job.refit.explicit_probe);
+    io.field(job.refit.explicit_replay);
 }
 
 template <class IO, class Outcome>
@@ -861,6 +915,9 @@ BrickJob brick_job_from_message(std::string_view message) {
             r.bad("the brick's interior is not inside its window");
     if (job.refit.replay_count < 0 || job.refit.replay_count > kRefitSuperStepAttempts)
         r.bad("its refit replays " + std::to_string(job.refit.replay_count) + " attempts");
+    if (job.refit.explicit_probe < 0 || job.refit.explicit_replay < -1)
+        r.bad("its refit's explicit steps are " + std::to_string(job.refit.explicit_probe) + " probed, " +
+              std::to_string(job.refit.explicit_replay) + " replayed");
     return job;
 }
 

@@ -77,6 +77,9 @@ struct BrickReport {
     /// with its decision replayed in every brick, or (refit_passes_windowed of them) each brick deciding in its window
     int refit_passes_redone = 0;
     int refit_passes_windowed = 0;
+    /// iterations whose refit went on in explicit steps (after the super steps' restarts), their patient stop
+    /// decided on the whole surface's D: the steps probed in every brick (passes counted in refit_passes_redone)
+    int refit_explicit_tails = 0;
     int total() const { return bricks[0] * bricks[1] * bricks[2]; }
 };
 
@@ -99,11 +102,14 @@ struct BrickContext {
 
 /// One brick of a pass over the bricks: its interior and window, and what the window starts from.
 /// A pass's refit, the same for all its bricks: SmoothOptions' refit_whole_time, refit_replay_count and refit_replay
-/// (the whole surface's decisions, replayed in every brick), over the context's engine options.
+/// (the whole surface's decisions, replayed in every brick), refit_explicit_probe and refit_explicit_replay (its
+/// explicit steps), over the context's engine options.
 struct BrickRefit {
     bool whole_time = true;
     int replay_count = 0;
     std::array<int, kRefitSuperStepAttempts> replay{};
+    int explicit_probe = 0;    ///< SmoothOptions::refit_explicit_probe
+    int explicit_replay = -1;  ///< SmoothOptions::refit_explicit_replay
 };
 
 struct BrickJob {

@@ -251,6 +251,10 @@ void validate_smooth_options(const SmoothOptions& opt, const std::string& who, c
     if (opt.refit_replay_count < 0 || opt.refit_replay_count > kRefitSuperStepAttempts)
         bad("refit_replay_count must be in [0, " + std::to_string(kRefitSuperStepAttempts) + "], got " +
             std::to_string(opt.refit_replay_count));
+    if (opt.refit_explicit_probe < 0)
+        bad("refit_explicit_probe must be >= 0, got " + std::to_string(opt.refit_explicit_probe));
+    if (opt.refit_explicit_replay < -1)
+        bad("refit_explicit_replay must be >= -1, got " + std::to_string(opt.refit_explicit_replay));
 }
 
 // The defaults are the filter's rules (lib/normals/stages); mean curvature flow, which has no

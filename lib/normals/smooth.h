@@ -120,6 +120,13 @@ struct SmoothOptions {
     /// The attempt after them (if any) runs as refit_whole_time says, its D alone in refit_window_energy.
     int refit_replay_count = 0;
     std::array<int, kRefitSuperStepAttempts> refit_replay{};
+    /// For work done brick by brick (smooth_in_bricks): the refit's explicit steps, where the whole surface's refit
+    /// goes on in them (after kRefitSuperStepAttempts restarts, or a first super step that ran away; all replayed).
+    /// refit_explicit_probe > 0: up to that many explicit steps, none undone and no stop of its own, D of each iterate
+    /// (and of the last) alone in refit_window_energy, for the caller to decide the patient stop on the whole
+    /// surface's D (decide_explicit_steps). refit_explicit_replay >= 0: exactly that many (the decision replayed).
+    int refit_explicit_probe = 0;
+    int refit_explicit_replay = -1;
     /// For work done brick by brick (smooth_in_bricks): with preserve_volume, measure the volume before and after
     /// each refit over the blocks window_lo <= (bi, bj, bk) < window_hi only (SmoothIteration::volume_before, ...)
     /// and leave the shift that restores it to the caller, who sums the bricks' measures; and count the filters'
@@ -251,6 +258,22 @@ struct SuperStepDecision {
     double time_kept = 0.0;  ///< the refit time of the super steps kept (voxel²)
 };
 SuperStepDecision decide_super_steps(const std::vector<double>& d, const SmoothOptions& options, double total);
+/// What the refit's explicit steps decide (refit_super_steps > 0, after the super steps' restarts; explicit_refit's
+/// patient stop on D given): d holds D of each iterate of a probe of `run` steps that kept them all, then of the last
+/// (run + 1 values); `rest` is the number of explicit steps the refit's time left.
+struct ExplicitStepDecision {
+    enum class Then {
+        Keep,     ///< `steps` kept (the patient stop undoes the one after them; rest where no stop comes)
+        Longer,   ///< no stop within the probe's `steps`, fewer than rest: a longer probe decides
+        Unknown,  ///< d is empty or holds a value that is not finite
+    };
+    Then then = Then::Unknown;
+    int steps = 0;
+};
+ExplicitStepDecision decide_explicit_steps(const std::vector<double>& d, const SmoothOptions& options, int rest);
+/// The explicit refit's patience (steps without a new low of D before it stops), for the options' refit steps (the
+/// mode's default where refit_max_steps is 0).
+int refit_explicit_patience(const SmoothOptions& options);
 /// The refit time of one main iteration (voxel²): its steps (refit_max_steps, or the mode's default) times refit_dt
 /// (at most the stability bound).
 double refit_time(const SmoothOptions& options);

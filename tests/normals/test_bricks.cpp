@@ -383,15 +383,20 @@ TEST(Bricks, BadMessagesAreRefused) {
     job.window = BlockWindow{{0, 0, 0}, {6, 6, 6}};
     job.input = Volume(window_grid(c.grid, job.window), 8.0f);
     job.input.set(1, 2, 3, 0.25f);
-    job.refit = BrickRefit{.whole_time = true, .replay_count = 2, .replay = {3, -2}};
+    job.refit = BrickRefit{.whole_time = true, .replay_count = 2, .replay = {3, -2}, .explicit_replay = 7};
     const std::string message = brick_message(job);
     const BrickJob read = brick_job_from_message(message);
     EXPECT_EQ(read.index, 3);
     EXPECT_TRUE(read.refit.whole_time);
     EXPECT_EQ(read.refit.replay_count, 2);
     EXPECT_EQ(read.refit.replay, job.refit.replay);
+    EXPECT_EQ(read.refit.explicit_probe, 0);
+    EXPECT_EQ(read.refit.explicit_replay, 7);
     BrickJob replays = job;
     replays.refit.replay_count = kRefitSuperStepAttempts + 1;
+    EXPECT_THROW(brick_job_from_message(brick_message(replays)), InvalidInput);
+    replays = job;
+    replays.refit.explicit_probe = -1;
     EXPECT_THROW(brick_job_from_message(brick_message(replays)), InvalidInput);
     EXPECT_EQ(read.input.values, job.input.values);
     EXPECT_EQ(read.input.block_table, job.input.block_table);
@@ -474,6 +479,43 @@ TEST(Bricks, TheRefitsChecksReadFromD) {
     d = falling;
     d.pop_back();
     EXPECT_FALSE(super_steps_keep_every_step(d, opt));
+    // fewer values (windows whose super steps stopped where φ was no longer finite): the decision where it falls
+    // within them
+    dec = decide_super_steps({8, 6, 20}, opt, total);
+    EXPECT_EQ(dec.then, Then::Restart);
+    EXPECT_EQ(dec.kept, 1);
+    EXPECT_EQ(decide_super_steps({8, 6, 5}, opt, total).then, Then::Unknown);
+}
+
+// The explicit steps after the super steps' restarts, on D given: D(φ_s) of each iterate of a probe that kept every
+// step, then of the last. The patient stop (5 steps without a new low, for 60 refit steps) and the runaway (D at
+// twice its low) each keep the steps before the one that stopped; a probe with no stop decides only if it ran every
+// step the time left.
+TEST(Bricks, TheExplicitStepsStopReadsFromD) {
+    SmoothOptions opt = bilateral(1, 1.5f);
+    opt.refit_max_steps = 60;
+    EXPECT_EQ(refit_explicit_patience(opt), 5);
+    using Then = ExplicitStepDecision::Then;
+    // the last new low at s = 4; s = 9 is the fifth step without one: 8 steps kept
+    ExplicitStepDecision e = decide_explicit_steps({10, 9, 8, 7.5, 7.4, 7.4, 7.45, 7.4, 7.42, 7.4, 7.3, 7.2}, opt, 58);
+    EXPECT_EQ(e.then, Then::Keep);
+    EXPECT_EQ(e.steps, 8);
+    e = decide_explicit_steps({10, 9, 8, 17, 3}, opt, 58);  // D(φ_3) more than doubled the low: φ_2 kept
+    EXPECT_EQ(e.then, Then::Keep);
+    EXPECT_EQ(e.steps, 2);
+    e = decide_explicit_steps({10, 9, 8, 7, 6}, opt, 58);  // no stop within the probe's 4 steps: a longer one
+    EXPECT_EQ(e.then, Then::Longer);
+    e = decide_explicit_steps({10, 9, 8, 7, 6}, opt, 4);  // the 4 steps the time left, all kept
+    EXPECT_EQ(e.then, Then::Keep);
+    EXPECT_EQ(e.steps, 4);
+    e = decide_explicit_steps({10, 9, 8, 7, 17}, opt, 4);  // the end's D is not checked (the last step is kept)
+    EXPECT_EQ(e.steps, 4);
+    e = decide_explicit_steps({10, 9, 8, 7, 17}, opt, 5);  // unless a step follows: D(φ_4) stops it at φ_3
+    EXPECT_EQ(e.steps, 3);
+    EXPECT_EQ(decide_explicit_steps({10, std::nan(""), 8}, opt, 58).then, Then::Unknown);
+    EXPECT_EQ(decide_explicit_steps({}, opt, 58).then, Then::Unknown);
+    opt.refit_max_steps = 2000;
+    EXPECT_EQ(refit_explicit_patience(opt), 100);
 }
 
 TEST(Bricks, BadOptionsAreRefused) {

@@ -136,7 +136,17 @@ double refit_energy(StageContext& c) {
 
 /// One explicit step φ ← φ + dt |∇φ|_upwind (H_φ − hn) on the active samples (phi → w.phi_next,
 /// then swapped). Returns D(φ before the step) when with_energy.
-double refit_step(StageContext& c, bool with_energy) {
+namespace {
+double refit_step_recorded(StageContext& c, bool with_energy, bool record_window, bool* nonfinite_out = nullptr);
+}  // namespace
+
+double refit_step(StageContext& c, bool with_energy) { return refit_step_recorded(c, with_energy, false); }
+
+namespace {
+
+/// refit_step; record_window: the window's part of D appended to refit_window_energy (record_window_energy);
+/// nonfinite_out: set where the step left φ not finite, instead of failing the run.
+double refit_step_recorded(StageContext& c, bool with_energy, bool record_window, bool* nonfinite_out) {
     Band& band = c.band;
     WorkBuffers& w = band.work();
     Samples& phi = band.phi();
@@ -166,14 +176,14 @@ double refit_step(StageContext& c, bool with_energy) {
         if (nonfinite) bad = true;
         energy[k] = e;
     });
-    if (bad) c.ctl.fail("phi in the refit");
+    if (bad && !nonfinite_out) c.ctl.fail("phi in the refit");
+    if (nonfinite_out) *nonfinite_out = bad;
+    if (record_window) record_window_energy(c, energy);
     std::swap(phi, w.phi_next);
     double sum = 0.0;
     for (const double e : energy) sum += e;
     return sum;
 }
-
-namespace {
 
 /// Each super step lasts this many times the one before: short ones first, where φ still moves
 /// fast (the first refit takes the noise out of it), long ones as it settles. On fandisk_n0.3 at
@@ -269,8 +279,11 @@ struct ExplicitResult {
     int steps = 0;
     double d_end = 0.0;
 };
+/// How explicit_refit runs: by its schedule's stop, or (smooth_in_bricks' replay of the whole surface) every step
+/// kept with no stop, D of each iterate in the window's record (a probe) or not (the decision replayed).
+enum class ExplicitChecks { Stop, Probe, Replay };
 ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule schedule, int patience,
-                              std::vector<double>& ds);
+                              std::vector<double>& ds, ExplicitChecks checks = ExplicitChecks::Stop);
 /// The explicit refit's patience: steps without a new low of D before it stops (surface-sample filters).
 int explicit_patience(const SmoothOptions& o) { return std::max(5, o.refit_max_steps / 20); }
 
@@ -394,9 +407,19 @@ void refit_super_stepping(StageContext& c) {
     double d_end = 0.0;
     for (int attempt = 0;; ++attempt) {
         if (attempt == kSuperStepRetries) {
-            const int rest = int(std::lround(left / dt));
-            const ExplicitResult e =
-                explicit_refit(c, std::max(rest, 1), RefitSchedule::Patient, explicit_patience(c.opt), ds);
+            const int rest = std::max(int(std::lround(left / dt)), 1);
+            const int patience = explicit_patience(c.opt);
+            ExplicitResult e;
+            if (c.opt.refit_explicit_replay >= 0) {  // the whole surface's stop (smooth_in_bricks)
+                e = explicit_refit(c, std::min(c.opt.refit_explicit_replay, rest), RefitSchedule::Patient, patience, ds,
+                                   ExplicitChecks::Replay);
+            } else if (c.opt.refit_explicit_probe > 0) {  // D of the steps, for the caller to decide the stop
+                c.record().refit_window_energy.clear();
+                e = explicit_refit(c, std::min(c.opt.refit_explicit_probe, rest), RefitSchedule::Patient, patience, ds,
+                                   ExplicitChecks::Probe);
+            } else {
+                e = explicit_refit(c, rest, RefitSchedule::Patient, patience, ds);
+            }
             kept += e.steps;
             d_end = e.d_end;
             break;
@@ -452,7 +475,7 @@ namespace {
 /// Up to max_steps explicit refit steps from φ, D of each iterate appended to ds; φ ends as the
 /// iterate the stop rule keeps (see refit_to_normals).
 ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule schedule, int patience,
-                              std::vector<double>& ds) {
+                              std::vector<double>& ds, ExplicitChecks checks) {
     WorkBuffers& w = c.band.work();
     Samples& phi = c.band.phi();
     copy_samples(phi, w.phi_next);
@@ -470,11 +493,25 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule sche
     double best = 0.0;
     int since_best = 0;
     for (int s = 0; s < max_steps; ++s) {
-        std::swap(w.phi_next, prev_phi);       // prev_phi ← φ_{s−1}; w.phi_next is overwritten by the step
-        const double d = refit_step(c, true);  // D(φ_s); now w.phi_next = φ_s, phi = φ_{s+1}
+        std::swap(w.phi_next, prev_phi);  // prev_phi ← φ_{s−1}; w.phi_next is overwritten by the step
+        // D(φ_s); now w.phi_next = φ_s, phi = φ_{s+1}
+        const bool probe = checks == ExplicitChecks::Probe;
+        bool nonfinite = false;
+        const double d = refit_step_recorded(c, true, probe, probe ? &nonfinite : nullptr);
         ++c.record().refit_evaluations;
         ds.push_back(d);
         c.ctl.tick(0.5 + 0.5 * double(s + 1) / max_steps);
+        if (nonfinite) {  // a probe ends where φ ran away (its D so far says where the whole surface's stops)
+            std::swap(phi, prev_phi);
+            d_end = prev;
+            stopped = true;
+            break;
+        }
+        if (checks != ExplicitChecks::Stop) {
+            ++steps;
+            prev = d;
+            continue;
+        }
         if (patient) {
             if (s == 0 || d < best * (1.0 - c.opt.refit_tolerance)) {
                 best = s == 0 ? d : std::min(best, d);
@@ -534,7 +571,7 @@ SuperStepDecision decide_super_steps(const std::vector<double>& d, const SmoothO
     // run_super_steps's checks, on D given: the same constants, the same order
     using Then = SuperStepDecision::Then;
     const int n = options.refit_super_steps;
-    if (n <= 0 || d.size() != std::size_t(n) + 1) return {};
+    if (n <= 0 || d.empty() || d.size() > std::size_t(n) + 1) return {};
     const double dt = refit_step_dt(options);
     const double growth = engine::kSuperStepGrowth;
     const double tau0 = growth == 1.0 ? total / n : total * (growth - 1.0) / (std::pow(growth, n) - 1.0);
@@ -551,7 +588,10 @@ SuperStepDecision decide_super_steps(const std::vector<double>& d, const SmoothO
         r.then = then;
         return r;
     };
+    // fewer values than super steps (a window whose super steps stopped where its φ was no longer finite): the
+    // decision where one falls within them
     for (int step = 0; step < n; ++step) {
+        if (std::size_t(step) == d.size()) return {};
         const double x = d[std::size_t(step)];
         if (!std::isfinite(x)) return {};
         if (step > 0 && x > 2.0 * best) return undo_last(Then::Restart);
@@ -568,12 +608,44 @@ SuperStepDecision decide_super_steps(const std::vector<double>& d, const SmoothO
         r.time_kept += tau_prev;
         prev = x;
     }
+    if (d.size() != std::size_t(n) + 1) return {};
     const double end = d.back();
     if (!std::isfinite(end)) return {};
     if (end > 2.0 * best) return undo_last(Then::Restart);
     if (!(end <= prev)) return undo_last(Then::Stop);
     r.then = Then::KeepAll;
     return r;
+}
+
+int refit_explicit_patience(const SmoothOptions& options) {
+    SmoothOptions resolved = options;
+    resolved.refit_max_steps = options.refit_max_steps > 0 ? options.refit_max_steps : default_refit_steps(options);
+    return engine::explicit_patience(resolved);
+}
+
+ExplicitStepDecision decide_explicit_steps(const std::vector<double>& d, const SmoothOptions& options, int rest) {
+    // explicit_refit's patient stop, on D given: the same constants, the same order. d[s] is D(φ_s), the iterate
+    // after s steps; a stop at s keeps s − 1 steps. d's last value, D after every step of the probe, is the next
+    // step's D in a refit that goes on.
+    using Then = ExplicitStepDecision::Then;
+    if (d.empty()) return {};
+    const int run = int(d.size()) - 1;
+    const int patience = refit_explicit_patience(options);
+    double best = 0.0;
+    int since_best = 0;
+    for (int s = 0; s <= run && s < rest; ++s) {
+        const double x = d[std::size_t(s)];
+        if (!std::isfinite(x)) return {};
+        if (s == 0 || x < best * (1.0 - options.refit_tolerance)) {
+            best = s == 0 ? x : std::min(best, x);
+            since_best = 0;
+        } else {
+            ++since_best;
+        }
+        if (s > 0 && (since_best >= patience || x > 2.0 * best)) return {Then::Keep, s - 1};
+    }
+    if (run >= rest) return {Then::Keep, rest};
+    return {Then::Longer, run};
 }
 
 bool super_steps_keep_every_step(const std::vector<double>& d, const SmoothOptions& options) {
