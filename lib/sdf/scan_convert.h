@@ -98,14 +98,17 @@ class WindingNumber;
 
 /// scan_convert restricted to the blocks of a window of `grid` (scan_grid(m, opt)), for work done brick by brick:
 /// the returned volume's grid is the window's (origin at its first sample, dims clipped to the grid's), its block
-/// (bi, bj, bk) the grid's (bi + lo, ...). On a closed mesh its values are bit for bit those of scan_convert(m, q,
-/// opt) in the same blocks, its tiles the same signs: samples are placed by `grid` itself, and a row of tiles that
-/// starts inside the grid starts with the sign of wn at its first block's centre. A window holding no surface is
-/// all tiles. Near the holes of an open mesh tiles follow each window's own rows, so two windows may disagree
-/// where scan_convert would allocate a conflict block; only the grid's own border counts as a border.
+/// (bi, bj, bk) the grid's (bi + lo, ...). Its values are bit for bit those of scan_convert(m, q, opt) in the same
+/// blocks, its tiles the same signs: samples are placed by `grid` itself, and a row of tiles that starts inside the
+/// grid starts as the whole grid's row runs there (the sign the last block scan_convert keeps before the window
+/// leaves, outside where it keeps none), open mesh or closed. A window holding no surface is all tiles. The
+/// conflict blocks near an open mesh's holes (an inside tile beside an outside one, allocated) are scan_convert's
+/// too, except on the window's outermost blocks, whose neighbours beyond it are not looked at: only the grid's own
+/// border counts as a border.
 /// \param wn the winding number of m (built once for all windows); may be null only with shell_thickness > 0.
 /// The mesh is not checked (check it once, as scan_convert does). Memory and time grow with the surface inside the
-/// window, plus one pass over the triangles.
+/// window, plus two passes over the triangles and, for each row of blocks that starts unallocated, the blocks
+/// before the window down to the first the whole scan keeps.
 /// \throw InvalidInput for bad options or a window not within the grid's blocks.
 Volume scan_convert_window(const Mesh& m, const ClosestTriangleQuery& q, const WindingNumber* wn, const Grid& grid,
                            const BlockWindow& window, const ScanConvertOptions& opt = {},
