@@ -287,6 +287,25 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule sche
 /// The explicit refit's patience: steps without a new low of D before it stops (surface-sample filters).
 int explicit_patience(const SmoothOptions& o) { return std::max(5, o.refit_max_steps / 20); }
 
+/// The explicit refit's patient stop, D of one iterate after another (explicit_refit, decide_explicit_steps): the
+/// refit stops at iterate s > 0 when D has not reached a new low (by more than `tolerance` of it) for `patience`
+/// steps, or rose to twice its low; it then keeps the iterate before.
+struct PatientStop {
+    double tolerance = 0.0;
+    int patience = 0;
+    double best = 0.0;
+    int since_best = 0;
+    bool stops_at(int s, double d) {
+        if (s == 0 || d < best * (1.0 - tolerance)) {
+            best = s == 0 ? d : std::min(best, d);
+            since_best = 0;
+        } else {
+            ++since_best;
+        }
+        return s > 0 && (since_best >= patience || d > 2.0 * best);
+    }
+};
+
 struct SuperResult {
     int kept = 0;            // super steps kept
     double d_end = 0.0;      // D of φ at the end (when not runaway)
@@ -490,8 +509,7 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule sche
     // the whole time, 6.4°). Their refit stops when D has not reached a new low for `patience`
     // steps, or when it rose to twice its low (a refit that runs away), undoing that last step.
     const bool patient = schedule == RefitSchedule::Patient;
-    double best = 0.0;
-    int since_best = 0;
+    PatientStop stop{.tolerance = c.opt.refit_tolerance, .patience = patience};
     for (int s = 0; s < max_steps; ++s) {
         std::swap(w.phi_next, prev_phi);  // prev_phi ← φ_{s−1}; w.phi_next is overwritten by the step
         // D(φ_s); now w.phi_next = φ_s, phi = φ_{s+1}
@@ -513,13 +531,7 @@ ExplicitResult explicit_refit(StageContext& c, int max_steps, RefitSchedule sche
             continue;
         }
         if (patient) {
-            if (s == 0 || d < best * (1.0 - c.opt.refit_tolerance)) {
-                best = s == 0 ? d : std::min(best, d);
-                since_best = 0;
-            } else {
-                ++since_best;
-            }
-            if (s > 0 && (since_best >= patience || d > 2.0 * best)) {
+            if (stop.stops_at(s, d)) {
                 std::swap(phi, prev_phi);  // back to φ_{s−1}
                 d_end = prev;
                 --steps;
@@ -624,25 +636,17 @@ int refit_explicit_patience(const SmoothOptions& options) {
 }
 
 ExplicitStepDecision decide_explicit_steps(const std::vector<double>& d, const SmoothOptions& options, int rest) {
-    // explicit_refit's patient stop, on D given: the same constants, the same order. d[s] is D(φ_s), the iterate
+    // explicit_refit's patient stop (PatientStop), on D given. d[s] is D(φ_s), the iterate
     // after s steps; a stop at s keeps s − 1 steps. d's last value, D after every step of the probe, is the next
     // step's D in a refit that goes on.
     using Then = ExplicitStepDecision::Then;
     if (d.empty()) return {};
     const int run = int(d.size()) - 1;
-    const int patience = refit_explicit_patience(options);
-    double best = 0.0;
-    int since_best = 0;
+    engine::PatientStop stop{.tolerance = options.refit_tolerance, .patience = refit_explicit_patience(options)};
     for (int s = 0; s <= run && s < rest; ++s) {
         const double x = d[std::size_t(s)];
         if (!std::isfinite(x)) return {};
-        if (s == 0 || x < best * (1.0 - options.refit_tolerance)) {
-            best = s == 0 ? x : std::min(best, x);
-            since_best = 0;
-        } else {
-            ++since_best;
-        }
-        if (s > 0 && (since_best >= patience || x > 2.0 * best)) return {Then::Keep, s - 1};
+        if (stop.stops_at(s, x)) return {Then::Keep, s - 1};
     }
     if (run >= rest) return {Then::Keep, rest};
     return {Then::Longer, run};
